@@ -1,0 +1,209 @@
+/*
+ * The finger axis model: a fixed-step simulation of one WSG gripper's
+ * fingers, their drive and a part between them.
+ *
+ * Command handlers only record requests (wsg_axis_request_*) and write
+ * session settings; the physical state changes only in wsg_axis_step(), which
+ * advances simulated time by exactly one fixed step. The model reads no clock
+ * and does no I/O: the caller drives it, a test with a fake clock, the daemon
+ * from a timerfd. Results of motion commands leave through a callback.
+ *
+ * Units: mm, mm/s, mm/s^2, N, microseconds. Width is the distance between
+ * the fingers (0 = closed).
+ */
+#ifndef WSG_AXIS_H
+#define WSG_AXIS_H
+
+#include <stdint.h>
+
+/* Appendix B: system state flags. */
+#define WSG_SF_REFERENCED (1u << 0)
+#define WSG_SF_MOVING (1u << 1)
+#define WSG_SF_BLOCKED_MINUS (1u << 2)
+#define WSG_SF_BLOCKED_PLUS (1u << 3)
+#define WSG_SF_SOFT_LIMIT_MINUS (1u << 4)
+#define WSG_SF_SOFT_LIMIT_PLUS (1u << 5)
+#define WSG_SF_AXIS_STOPPED (1u << 6)
+#define WSG_SF_TARGET_POS_REACHED (1u << 7)
+#define WSG_SF_OVERDRIVE_MODE (1u << 8)
+#define WSG_SF_FORCECNTL_MODE (1u << 9)
+#define WSG_SF_FAST_STOP (1u << 12)
+#define WSG_SF_TEMP_WARNING (1u << 13)
+#define WSG_SF_TEMP_FAULT (1u << 14)
+#define WSG_SF_POWER_FAULT (1u << 15)
+#define WSG_SF_CURR_FAULT (1u << 16)
+#define WSG_SF_FINGER_FAULT (1u << 17)
+#define WSG_SF_CMD_FAILURE (1u << 18)
+#define WSG_SF_SCRIPT_RUNNING (1u << 19)
+#define WSG_SF_SCRIPT_FAILURE (1u << 20)
+
+/* Faults that can be injected; each is also its flag. */
+#define WSG_FAULTS                                                           \
+    (WSG_SF_TEMP_WARNING | WSG_SF_TEMP_FAULT | WSG_SF_POWER_FAULT |          \
+     WSG_SF_CURR_FAULT | WSG_SF_FINGER_FAULT)
+/* Faults that disable every movement-related command. */
+#define WSG_FAULTS_BLOCKING                                                  \
+    (WSG_SF_TEMP_FAULT | WSG_SF_POWER_FAULT | WSG_SF_CURR_FAULT |            \
+     WSG_SF_FINGER_FAULT)
+
+/* Grasping states (41h), as real grippers report them. */
+enum wsg_grasp_state {
+    WSG_GS_IDLE = 0,
+    WSG_GS_GRASPING = 1,
+    WSG_GS_NO_PART = 2,
+    WSG_GS_PART_LOST = 3,
+    WSG_GS_HOLDING = 4,
+    WSG_GS_RELEASING = 5,
+    WSG_GS_POSITIONING = 6,
+    WSG_GS_ERROR = 7
+};
+
+enum wsg_homing_dir { WSG_HOME_DEFAULT = 0, WSG_HOME_POSITIVE = 1,
+                      WSG_HOME_NEGATIVE = 2 };
+
+/* Preposition FLAGS (21h). */
+#define WSG_MOVE_RELATIVE 0x01u
+#define WSG_MOVE_STOP_ON_BLOCK 0x02u
+
+/* What the gripper's web page and model type fix; see wsg_axis_config_init. */
+struct wsg_axis_config {
+    double stroke;           /* mm */
+    double min_speed, max_speed;
+    double min_acc, max_acc;
+    double min_force, nom_force, ovr_force;
+    double default_acc;      /* session default, restored on reset */
+    double default_force;    /* session default force limit */
+    double homing_speed;     /* mm/s */
+    double clamp_travel;     /* mm: grasp clamping travel */
+    double width_tolerance;  /* mm: part width tolerance */
+    double part_stiffness;   /* N/mm: default for a placed part */
+    int homing_dir;          /* WSG_HOME_POSITIVE or WSG_HOME_NEGATIVE */
+    int force_sensor;        /* force measurement fingers fitted (tare) */
+    uint32_t step_us;        /* fixed step length */
+};
+
+struct wsg_grasp_stats {
+    uint32_t total;
+    uint16_t no_part;
+    uint16_t lost_part;
+};
+
+/* Called from wsg_axis_step when a motion command ends. tag is what the
+ * request carried (the dispatcher's record of who asked). */
+typedef void (*wsg_axis_done_fn)(void *ctx, uint32_t tag, uint8_t cmd_id,
+                                 uint16_t status);
+
+enum wsg_motion_kind {
+    WSG_MOTION_NONE = 0,
+    WSG_MOTION_HOMING,
+    WSG_MOTION_MOVE,
+    WSG_MOTION_GRASP,
+    WSG_MOTION_RELEASE,
+    WSG_MOTION_SNAP /* silent: a clamp released or a part lost */
+};
+
+/* A trapezoidal profile from rest; positions follow analytically from the
+ * time since its start, so durations are exact to one step. */
+struct wsg_profile {
+    double start, dist, dir; /* dir = +1 or -1 */
+    double vmax, acc;
+    double t_acc, t_total;   /* seconds */
+    int decel;               /* 0: runs into an end stop at speed */
+    double t;                /* seconds since start */
+};
+
+struct wsg_motion {
+    enum wsg_motion_kind kind;
+    uint8_t cmd_id;
+    uint32_t tag;
+    double target;           /* where the profile ends */
+    double nominal;          /* grasp: the part's nominal width */
+    double speed;
+    uint8_t move_flags;      /* preposition flags */
+    struct wsg_profile prof;
+};
+
+struct wsg_axis {
+    struct wsg_axis_config cfg;
+    wsg_axis_done_fn on_done;
+    void *done_ctx;
+
+    /* Physical state, changed only by wsg_axis_step. */
+    uint64_t time_us;
+    double width, speed, force;
+    int referenced;
+    int fast_stop;
+    uint32_t event_flags;    /* AXIS_STOPPED, TARGET_POS_REACHED, BLOCKED_* */
+    enum wsg_grasp_state grasp_state;
+    struct wsg_grasp_stats stats;
+    struct wsg_motion motion;
+    int clamping;            /* motor pushes with the force limit */
+    double clamp_target;     /* where the fingers snap if the block goes */
+    int clamp_dir;
+
+    /* Session settings, written directly by command handlers. */
+    double acc;
+    double force_limit;
+    int overdrive;
+    int soft_limits;
+    double soft_minus, soft_plus;
+
+    /* The world: a part between the fingers. */
+    int part;
+    double part_width, part_stiffness;
+    uint32_t faults;         /* injected fault flags (WSG_FAULTS) */
+
+    /* Requests recorded by handlers, applied by the next step in order:
+     * fast stop, acknowledge, stop, new motion. */
+    int req_fast_stop, req_ack, req_stop;
+    struct wsg_motion req_motion;
+};
+
+/* Models selectable by name: "wsg50" (default), "wsg50-210", "wsg32",
+ * "wsg25". Returns 0 or -EINVAL for an unknown name. */
+int wsg_axis_config_init(struct wsg_axis_config *cfg, const char *model);
+
+void wsg_axis_init(struct wsg_axis *ax, const struct wsg_axis_config *cfg,
+                   wsg_axis_done_fn on_done, void *ctx);
+/* Power cycle: session settings back to defaults, not referenced. */
+void wsg_axis_reset(struct wsg_axis *ax);
+
+/* Advance simulated time by one step (cfg.step_us). */
+void wsg_axis_step(struct wsg_axis *ax);
+/* Nothing moving, pending or changing: steps would not change the state, so
+ * a caller may skip them (only time_us would advance). */
+int wsg_axis_idle(const struct wsg_axis *ax);
+
+/* The state as the commands report it. */
+uint32_t wsg_axis_flags(const struct wsg_axis *ax);
+/* In FAST STOP, counting requests not applied yet. */
+int wsg_axis_fast_stopped(const struct wsg_axis *ax);
+/* Moving or about to move: a new motion command gets E_ALREADY_RUNNING. */
+int wsg_axis_busy(const struct wsg_axis *ax);
+
+/* Requests. The motion requests validate against the current state and
+ * return the immediate status (E_CMD_PENDING when accepted); speeds and
+ * widths are clamped to the model's limits as the manual says. */
+uint16_t wsg_axis_request_homing(struct wsg_axis *ax, int dir, uint32_t tag);
+uint16_t wsg_axis_request_move(struct wsg_axis *ax, uint8_t flags,
+                               double width, double speed, uint32_t tag);
+uint16_t wsg_axis_request_grasp(struct wsg_axis *ax, double width,
+                                double speed, uint32_t tag);
+uint16_t wsg_axis_request_release(struct wsg_axis *ax, double width,
+                                  double speed, uint32_t tag);
+void wsg_axis_request_stop(struct wsg_axis *ax);
+void wsg_axis_request_fast_stop(struct wsg_axis *ax);
+void wsg_axis_request_ack(struct wsg_axis *ax);
+
+/* Session settings (clamped as the manual says). */
+void wsg_axis_set_acc(struct wsg_axis *ax, double acc);
+void wsg_axis_set_force_limit(struct wsg_axis *ax, double force);
+void wsg_axis_set_overdrive(struct wsg_axis *ax, int on);
+void wsg_axis_set_soft_limits(struct wsg_axis *ax, double minus, double plus);
+void wsg_axis_clear_soft_limits(struct wsg_axis *ax);
+
+/* The world (control channel, tests). width < 0 removes the part. */
+void wsg_axis_set_part(struct wsg_axis *ax, double width, double stiffness);
+void wsg_axis_set_fault(struct wsg_axis *ax, uint32_t fault, int on);
+
+#endif

@@ -1,0 +1,106 @@
+/*
+ * One emulated gripper as its interfaces see it: the axis model plus what the
+ * gripper stores (type, serial number, device tag), the command dispatcher,
+ * and the per-peer sessions with their auto-update streams.
+ *
+ * A transport owns a wsg_parser and a wsg_session per peer, feeds received
+ * bytes to wsg_device_input and sends what comes back through the session's
+ * send callback, one call per packet. Final results of motion commands are
+ * routed by session tag through the lookup callback, because the peer that
+ * asked may have gone by the time the motion ends.
+ */
+#ifndef WSG_DEVICE_H
+#define WSG_DEVICE_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "wsg/axis.h"
+#include "wsg/proto.h"
+
+#define WSG_TAG_MAX 64u
+
+enum wsg_stream_id {
+    WSG_STREAM_SYSTEM_STATE = 0, /* 40h */
+    WSG_STREAM_GRASP_STATE,      /* 41h */
+    WSG_STREAM_WIDTH,            /* 43h */
+    WSG_STREAM_SPEED,            /* 44h */
+    WSG_STREAM_FORCE,            /* 45h */
+    WSG_STREAM_COUNT
+};
+
+struct wsg_stream {
+    uint8_t on;
+    uint8_t change_only;
+    uint32_t period_us;
+    uint64_t due_us;  /* simulated time of the next packet */
+    float last;       /* value last sent (flags and states as float) */
+};
+
+struct wsg_session;
+/* Send one complete packet. Must not call back into the device. */
+typedef void (*wsg_send_fn)(struct wsg_session *s, const uint8_t *pkt,
+                            size_t len);
+
+/* Session flags. */
+#define WSG_SESSION_CONNECTION 0x01u /* TCP: 07h available, close matters */
+
+struct wsg_session {
+    uint32_t tag; /* unique among live sessions; never 0 */
+    unsigned flags;
+    int announced; /* got Disconnect Announcement (07h) */
+    wsg_send_fn send;
+    void *ctx; /* the transport's */
+    unsigned nstreams;
+    struct wsg_stream streams[WSG_STREAM_COUNT];
+};
+
+struct wsg_device_info {
+    uint8_t type;   /* 1: WSG 50 (see NOTES: 2 WSG 32, 5 WSG 25) */
+    uint8_t hwrev;
+    uint16_t swrev; /* major<<12 | minor<<8 | patch<<4 */
+    uint32_t serial;
+};
+
+struct wsg_device {
+    struct wsg_axis axis;
+    struct wsg_device_info info;
+    char tag[WSG_TAG_MAX + 1];
+    size_t tag_len; /* 0: no device tag set */
+    int disconnect_fast_stop; /* TCP close without 07h: FAST STOP */
+    int cmd_failure;          /* SF_CMD_FAILURE: last command failed */
+    /* Resolve a session tag for a final result; NULL when it is gone. */
+    struct wsg_session *(*lookup)(void *ctx, uint32_t tag);
+    void *lookup_ctx;
+};
+
+void wsg_device_init(struct wsg_device *d, const struct wsg_axis_config *cfg);
+/* Power cycle: session settings back to defaults, not referenced. */
+void wsg_device_reset(struct wsg_device *d);
+
+void wsg_session_init(struct wsg_session *s, uint32_t tag, unsigned flags,
+                      wsg_send_fn send, void *ctx);
+/* The peer went away (TCP close): FAST STOP unless it announced it. */
+void wsg_device_session_closed(struct wsg_device *d, struct wsg_session *s);
+
+/* Feed received bytes: every frame, checksum error and oversize is
+ * dispatched and answered through s->send. */
+void wsg_device_input(struct wsg_device *d, struct wsg_session *s,
+                      struct wsg_parser *p, const uint8_t *data, size_t len);
+/* Dispatch one parsed frame (the table's length and state checks, then the
+ * handler) and send its reply. */
+void wsg_device_dispatch(struct wsg_device *d, struct wsg_session *s,
+                         const struct wsg_frame *f);
+
+/* One model step; final results leave through lookup/send. */
+void wsg_device_step(struct wsg_device *d);
+/* Send the stream packets of s that are due at the device's time. */
+void wsg_device_poll_streams(struct wsg_device *d, struct wsg_session *s);
+/* Nothing for steps to do: model idle. Streams are the caller's to count
+ * (s->nstreams). */
+int wsg_device_idle(const struct wsg_device *d);
+
+/* The command table, for tools and logs: name of an ID or NULL. */
+const char *wsg_cmd_name(uint8_t id);
+
+#endif
