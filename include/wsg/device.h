@@ -99,6 +99,9 @@ void wsg_device_poll_streams(struct wsg_device *d, struct wsg_session *s);
 /* Nothing for steps to do: model idle. Streams are the caller's to count
  * (s->nstreams). */
 int wsg_device_idle(const struct wsg_device *d);
+/* Advance simulated time by n steps while idle (the state cannot change, so
+ * the loop may skip stepping through a quiet gap). */
+void wsg_device_advance_idle(struct wsg_device *d, uint64_t nsteps);
 
 /* The command table, for tools and logs: name of an ID or NULL. */
 const char *wsg_cmd_name(uint8_t id);
