@@ -17,33 +17,33 @@
 #include <stdint.h>
 
 /* Appendix B: system state flags. */
-#define WSG_SF_REFERENCED (1u << 0)
-#define WSG_SF_MOVING (1u << 1)
-#define WSG_SF_BLOCKED_MINUS (1u << 2)
-#define WSG_SF_BLOCKED_PLUS (1u << 3)
-#define WSG_SF_SOFT_LIMIT_MINUS (1u << 4)
-#define WSG_SF_SOFT_LIMIT_PLUS (1u << 5)
-#define WSG_SF_AXIS_STOPPED (1u << 6)
+#define WSG_SF_REFERENCED         (1u << 0)
+#define WSG_SF_MOVING             (1u << 1)
+#define WSG_SF_BLOCKED_MINUS      (1u << 2)
+#define WSG_SF_BLOCKED_PLUS       (1u << 3)
+#define WSG_SF_SOFT_LIMIT_MINUS   (1u << 4)
+#define WSG_SF_SOFT_LIMIT_PLUS    (1u << 5)
+#define WSG_SF_AXIS_STOPPED       (1u << 6)
 #define WSG_SF_TARGET_POS_REACHED (1u << 7)
-#define WSG_SF_OVERDRIVE_MODE (1u << 8)
-#define WSG_SF_FORCECNTL_MODE (1u << 9)
-#define WSG_SF_FAST_STOP (1u << 12)
-#define WSG_SF_TEMP_WARNING (1u << 13)
-#define WSG_SF_TEMP_FAULT (1u << 14)
-#define WSG_SF_POWER_FAULT (1u << 15)
-#define WSG_SF_CURR_FAULT (1u << 16)
-#define WSG_SF_FINGER_FAULT (1u << 17)
-#define WSG_SF_CMD_FAILURE (1u << 18)
-#define WSG_SF_SCRIPT_RUNNING (1u << 19)
-#define WSG_SF_SCRIPT_FAILURE (1u << 20)
+#define WSG_SF_OVERDRIVE_MODE     (1u << 8)
+#define WSG_SF_FORCECNTL_MODE     (1u << 9)
+#define WSG_SF_FAST_STOP          (1u << 12)
+#define WSG_SF_TEMP_WARNING       (1u << 13)
+#define WSG_SF_TEMP_FAULT         (1u << 14)
+#define WSG_SF_POWER_FAULT        (1u << 15)
+#define WSG_SF_CURR_FAULT         (1u << 16)
+#define WSG_SF_FINGER_FAULT       (1u << 17)
+#define WSG_SF_CMD_FAILURE        (1u << 18)
+#define WSG_SF_SCRIPT_RUNNING     (1u << 19)
+#define WSG_SF_SCRIPT_FAILURE     (1u << 20)
 
 /* Faults that can be injected; each is also its flag. */
-#define WSG_FAULTS                                                           \
-    (WSG_SF_TEMP_WARNING | WSG_SF_TEMP_FAULT | WSG_SF_POWER_FAULT |          \
+#define WSG_FAULTS                                                            \
+    (WSG_SF_TEMP_WARNING | WSG_SF_TEMP_FAULT | WSG_SF_POWER_FAULT |           \
      WSG_SF_CURR_FAULT | WSG_SF_FINGER_FAULT)
 /* Faults that disable every movement-related command. */
-#define WSG_FAULTS_BLOCKING                                                  \
-    (WSG_SF_TEMP_FAULT | WSG_SF_POWER_FAULT | WSG_SF_CURR_FAULT |            \
+#define WSG_FAULTS_BLOCKING                                                   \
+    (WSG_SF_TEMP_FAULT | WSG_SF_POWER_FAULT | WSG_SF_CURR_FAULT |             \
      WSG_SF_FINGER_FAULT)
 
 /* Grasping states (41h), as real grippers report them. */
@@ -58,28 +58,32 @@ enum wsg_grasp_state {
     WSG_GS_ERROR = 7
 };
 
-enum wsg_homing_dir { WSG_HOME_DEFAULT = 0, WSG_HOME_POSITIVE = 1,
-                      WSG_HOME_NEGATIVE = 2 };
+enum wsg_homing_dir {
+    WSG_HOME_DEFAULT = 0,
+    WSG_HOME_POSITIVE = 1,
+    WSG_HOME_NEGATIVE = 2
+};
 
 /* Preposition FLAGS (21h). */
-#define WSG_MOVE_RELATIVE 0x01u
+#define WSG_MOVE_RELATIVE      0x01u
 #define WSG_MOVE_STOP_ON_BLOCK 0x02u
 
 /* What the gripper's web page and model type fix; see wsg_axis_config_init. */
 struct wsg_axis_config {
-    double stroke;           /* mm */
+    uint8_t type;  /* Get System Information TYPE (NOTES.md) */
+    double stroke; /* mm */
     double min_speed, max_speed;
     double min_acc, max_acc;
     double min_force, nom_force, ovr_force;
-    double default_acc;      /* session default, restored on reset */
-    double default_force;    /* session default force limit */
-    double homing_speed;     /* mm/s */
-    double clamp_travel;     /* mm: grasp clamping travel */
-    double width_tolerance;  /* mm: part width tolerance */
-    double part_stiffness;   /* N/mm: default for a placed part */
-    int homing_dir;          /* WSG_HOME_POSITIVE or WSG_HOME_NEGATIVE */
-    int force_sensor;        /* force measurement fingers fitted (tare) */
-    uint32_t step_us;        /* fixed step length */
+    double default_acc;     /* session default, restored on reset */
+    double default_force;   /* session default force limit */
+    double homing_speed;    /* mm/s */
+    double clamp_travel;    /* mm: grasp clamping travel */
+    double width_tolerance; /* mm: part width tolerance */
+    double part_stiffness;  /* N/mm: default for a placed part */
+    int homing_dir;         /* WSG_HOME_POSITIVE or WSG_HOME_NEGATIVE */
+    int force_sensor;       /* force measurement fingers fitted (tare) */
+    uint32_t step_us;       /* fixed step length */
 };
 
 struct wsg_grasp_stats {
@@ -107,19 +111,19 @@ enum wsg_motion_kind {
 struct wsg_profile {
     double start, dist, dir; /* dir = +1 or -1 */
     double vmax, acc;
-    double t_acc, t_total;   /* seconds */
-    int decel;               /* 0: runs into an end stop at speed */
-    double t;                /* seconds since start */
+    double t_acc, t_total; /* seconds */
+    int decel;             /* 0: runs into an end stop at speed */
+    double t;              /* seconds since start */
 };
 
 struct wsg_motion {
     enum wsg_motion_kind kind;
     uint8_t cmd_id;
     uint32_t tag;
-    double target;           /* where the profile ends */
-    double nominal;          /* grasp: the part's nominal width */
+    double target;  /* where the profile ends */
+    double nominal; /* grasp: the part's nominal width */
     double speed;
-    uint8_t move_flags;      /* preposition flags */
+    uint8_t move_flags; /* preposition flags */
     struct wsg_profile prof;
 };
 
@@ -133,12 +137,14 @@ struct wsg_axis {
     double width, speed, force;
     int referenced;
     int fast_stop;
-    uint32_t event_flags;    /* AXIS_STOPPED, TARGET_POS_REACHED, BLOCKED_* */
+    uint32_t event_flags; /* AXIS_STOPPED, TARGET_POS_REACHED, BLOCKED_* */
     enum wsg_grasp_state grasp_state;
     struct wsg_grasp_stats stats;
     struct wsg_motion motion;
-    int clamping;            /* motor pushes with the force limit */
-    double clamp_target;     /* where the fingers snap if the block goes */
+    int clamping;        /* motor pushes against a block */
+    double clamp_force;  /* the force limit when the block was found */
+    double clamp_target; /* where the fingers snap if the block goes */
+    double clamp_speed;
     int clamp_dir;
 
     /* Session settings, written directly by command handlers. */
@@ -151,12 +157,16 @@ struct wsg_axis {
     /* The world: a part between the fingers. */
     int part;
     double part_width, part_stiffness;
-    uint32_t faults;         /* injected fault flags (WSG_FAULTS) */
+    uint32_t faults;    /* injected fault flags (WSG_FAULTS) */
+    double temperature; /* degC, reported by 46h */
 
     /* Requests recorded by handlers, applied by the next step in order:
      * fast stop, acknowledge, stop, new motion. */
     int req_fast_stop, req_ack, req_stop;
     struct wsg_motion req_motion;
+    /* A request answered E_CMD_PENDING and cancelled by a Stop or FAST STOP
+     * before it started: it still owes its final E_CMD_ABORTED. */
+    struct wsg_motion req_cancelled;
 };
 
 /* Models selectable by name: "wsg50" (default), "wsg50-210", "wsg32",

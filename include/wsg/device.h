@@ -33,8 +33,8 @@ struct wsg_stream {
     uint8_t on;
     uint8_t change_only;
     uint32_t period_us;
-    uint64_t due_us;  /* simulated time of the next packet */
-    float last;       /* value last sent (flags and states as float) */
+    uint64_t due_us; /* simulated time of the next packet */
+    float last;      /* value last sent (flags and states as float) */
 };
 
 struct wsg_session;
@@ -56,7 +56,7 @@ struct wsg_session {
 };
 
 struct wsg_device_info {
-    uint8_t type;   /* 1: WSG 50 (see NOTES: 2 WSG 32, 5 WSG 25) */
+    uint8_t type; /* 1: WSG 50 (see NOTES: 2 WSG 32, 5 WSG 25) */
     uint8_t hwrev;
     uint16_t swrev; /* major<<12 | minor<<8 | patch<<4 */
     uint32_t serial;
@@ -66,7 +66,7 @@ struct wsg_device {
     struct wsg_axis axis;
     struct wsg_device_info info;
     char tag[WSG_TAG_MAX + 1];
-    size_t tag_len; /* 0: no device tag set */
+    size_t tag_len;           /* 0: no device tag set */
     int disconnect_fast_stop; /* TCP close without 07h: FAST STOP */
     int cmd_failure;          /* SF_CMD_FAILURE: last command failed */
     /* Resolve a session tag for a final result; NULL when it is gone. */

@@ -14,18 +14,18 @@
 #include <stdint.h>
 
 #define WSG_PREAMBLE_BYTE 0xAAu
-#define WSG_PREAMBLE_LEN 3u
-#define WSG_HEADER_LEN 6u /* preamble, ID, SIZE (u16) */
-#define WSG_CRC_LEN 2u
-#define WSG_CRC_INIT 0xFFFFu
+#define WSG_PREAMBLE_LEN  3u
+#define WSG_HEADER_LEN    6u /* preamble, ID, SIZE (u16) */
+#define WSG_CRC_LEN       2u
+#define WSG_CRC_INIT      0xFFFFu
 
 /* Largest request payload any command accepts: Loop (06h) takes 256 bytes.
  * A SIZE above this is refused before a single payload byte is buffered. */
 #define WSG_PAYLOAD_MAX 256u
 /* A reply carries a 2-byte status before its parameters (Loop echoes 256). */
-#define WSG_REPLY_PARAMS_MAX WSG_PAYLOAD_MAX
+#define WSG_REPLY_PARAMS_MAX  WSG_PAYLOAD_MAX
 #define WSG_REPLY_PAYLOAD_MAX (WSG_REPLY_PARAMS_MAX + 2u)
-#define WSG_FRAME_MAX (WSG_HEADER_LEN + WSG_REPLY_PAYLOAD_MAX + WSG_CRC_LEN)
+#define WSG_FRAME_MAX         (WSG_HEADER_LEN + WSG_REPLY_PAYLOAD_MAX + WSG_CRC_LEN)
 
 /* Appendix A: every status a reply can carry. */
 enum wsg_status {
@@ -129,10 +129,10 @@ struct wsg_frame {
 };
 
 enum wsg_parse_event {
-    WSG_PARSE_NONE = 0,  /* all input consumed, no event */
-    WSG_PARSE_FRAME,     /* a complete frame with a good (or ignored) CRC */
-    WSG_PARSE_BAD_CRC,   /* complete frame, wrong CRC: frame.id is valid */
-    WSG_PARSE_OVERSIZE   /* SIZE above WSG_PAYLOAD_MAX: frame.id is valid */
+    WSG_PARSE_NONE = 0, /* all input consumed, no event */
+    WSG_PARSE_FRAME,    /* a complete frame with a good (or ignored) CRC */
+    WSG_PARSE_BAD_CRC,  /* complete frame, wrong CRC: frame.id is valid */
+    WSG_PARSE_OVERSIZE  /* SIZE above WSG_PAYLOAD_MAX: frame.id is valid */
 };
 
 struct wsg_parser {

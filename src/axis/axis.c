@@ -1,0 +1,710 @@
+/*
+ * The finger axis model.
+ *
+ * Motions follow a trapezoidal (acceleration-limited) profile from rest,
+ * evaluated analytically from the time since the motion started, so a
+ * motion's duration is exact to one step whatever the step length. Contact
+ * is the only thing that cuts a profile short: closing onto the part builds
+ * up force as stiffness times compression until the force limit is reached,
+ * and there the axis blocks. What happens at a block depends on the motion:
+ * homing takes its reference, a preposition stops or clamps, a grasp holds
+ * or reports no part by the clamping-travel window of NOTES.md.
+ *
+ * Handlers record requests; wsg_axis_step applies them in a fixed order
+ * (FAST STOP, acknowledge, stop, new motion) and then advances the physics.
+ */
+#include <errno.h>
+#include <math.h>
+#include <string.h>
+
+#include "wsg/axis.h"
+#include "wsg/proto.h"
+
+/* Widths closer than this are the same position (well below the 0.01 mm
+ * change threshold of 43h). */
+#define WSG_AXIS_EPS 1e-6
+
+struct wsg_axis_model {
+    const char *name;
+    uint8_t type;
+    double stroke, min_speed, max_speed, min_acc, max_acc;
+    double min_force, nom_force, ovr_force;
+};
+
+/* WSG 50 figures from NOTES.md; the smaller models from the catalogue,
+ * their overdrive force at 1.5 times nominal like the WSG 50's. */
+static const struct wsg_axis_model wsg_axis_models[] = {
+    {"wsg50", 1, 110.0, 5.0, 420.0, 100.0, 5000.0, 5.0, 80.0, 120.0},
+    {"wsg50-210", 1, 210.0, 5.0, 420.0, 100.0, 5000.0, 5.0, 80.0, 120.0},
+    {"wsg32", 2, 68.0, 5.0, 400.0, 100.0, 5000.0, 5.0, 50.0, 75.0},
+    {"wsg25", 5, 64.0, 5.0, 250.0, 100.0, 5000.0, 5.0, 20.0, 30.0},
+};
+
+static double wsg_clamp(double v, double lo, double hi)
+{
+    return v < lo ? lo : v > hi ? hi : v;
+}
+
+int wsg_axis_config_init(struct wsg_axis_config *cfg, const char *model)
+{
+    const struct wsg_axis_model *m = NULL;
+    size_t i;
+
+    if (!model)
+        model = "wsg50";
+    for (i = 0; i < sizeof wsg_axis_models / sizeof wsg_axis_models[0]; i++)
+        if (strcmp(wsg_axis_models[i].name, model) == 0)
+            m = &wsg_axis_models[i];
+    if (!m)
+        return -EINVAL;
+    memset(cfg, 0, sizeof *cfg);
+    cfg->type = m->type;
+    cfg->stroke = m->stroke;
+    cfg->min_speed = m->min_speed;
+    cfg->max_speed = m->max_speed;
+    cfg->min_acc = m->min_acc;
+    cfg->max_acc = m->max_acc;
+    cfg->min_force = m->min_force;
+    cfg->nom_force = m->nom_force;
+    cfg->ovr_force = m->ovr_force;
+    cfg->default_acc = 150.0;
+    cfg->default_force = m->nom_force / 2.0;
+    cfg->homing_speed = 100.0;
+    cfg->clamp_travel = 10.0;
+    cfg->width_tolerance = 10.0;
+    cfg->part_stiffness = 50.0;
+    cfg->homing_dir = WSG_HOME_POSITIVE;
+    cfg->force_sensor = 0;
+    cfg->step_us = 1000;
+    return 0;
+}
+
+static void wsg_profile_init(struct wsg_profile *pr, double from, double to,
+                             double vmax, double acc, int decel)
+{
+    double d = fabs(to - from);
+
+    pr->start = from;
+    pr->dist = d;
+    pr->dir = to >= from ? 1.0 : -1.0;
+    pr->acc = acc;
+    pr->decel = decel;
+    pr->t = 0.0;
+    if (decel) {
+        if (d * acc >= vmax * vmax) {
+            pr->t_acc = vmax / acc;
+            pr->t_total = 2.0 * pr->t_acc + (d - vmax * vmax / acc) / vmax;
+        } else { /* triangular: never reaches vmax */
+            pr->t_acc = sqrt(d / acc);
+            vmax = acc * pr->t_acc;
+            pr->t_total = 2.0 * pr->t_acc;
+        }
+    } else { /* into an end stop at speed */
+        double d_acc = vmax * vmax / (2.0 * acc);
+        if (d >= d_acc) {
+            pr->t_acc = vmax / acc;
+            pr->t_total = pr->t_acc + (d - d_acc) / vmax;
+        } else {
+            pr->t_acc = sqrt(2.0 * d / acc);
+            vmax = acc * pr->t_acc;
+            pr->t_total = pr->t_acc;
+        }
+    }
+    pr->vmax = vmax;
+}
+
+/* Position and signed speed at pr->t; returns 1 when the profile is over. */
+static int wsg_profile_eval(const struct wsg_profile *pr, double *x, double *v)
+{
+    double t = pr->t, s, speed;
+
+    if (t >= pr->t_total) {
+        *x = pr->start + pr->dir * pr->dist;
+        *v = 0.0;
+        return 1;
+    }
+    if (t < pr->t_acc) {
+        s = 0.5 * pr->acc * t * t;
+        speed = pr->acc * t;
+    } else if (!pr->decel || t < pr->t_total - pr->t_acc) {
+        s = 0.5 * pr->acc * pr->t_acc * pr->t_acc + pr->vmax * (t - pr->t_acc);
+        speed = pr->vmax;
+    } else {
+        double td = pr->t_total - t;
+        s = pr->dist - 0.5 * pr->acc * td * td;
+        speed = pr->acc * td;
+    }
+    *x = pr->start + pr->dir * s;
+    *v = pr->dir * speed;
+    return 0;
+}
+
+void wsg_axis_init(struct wsg_axis *ax, const struct wsg_axis_config *cfg,
+                   wsg_axis_done_fn on_done, void *ctx)
+{
+    memset(ax, 0, sizeof *ax);
+    ax->cfg = *cfg;
+    ax->on_done = on_done;
+    ax->done_ctx = ctx;
+    /* Power-up finger position is wherever they were left: mid-stroke. */
+    ax->width = cfg->stroke / 2.0;
+    ax->part_stiffness = cfg->part_stiffness;
+    ax->temperature = 25.0;
+    wsg_axis_reset(ax);
+}
+
+void wsg_axis_reset(struct wsg_axis *ax)
+{
+    ax->speed = 0.0;
+    ax->force = 0.0;
+    ax->referenced = 0;
+    ax->fast_stop = 0;
+    ax->event_flags = 0;
+    ax->grasp_state = WSG_GS_IDLE;
+    memset(&ax->stats, 0, sizeof ax->stats);
+    memset(&ax->motion, 0, sizeof ax->motion);
+    ax->clamping = 0;
+    ax->acc = ax->cfg.default_acc;
+    ax->force_limit = ax->cfg.default_force;
+    ax->overdrive = 0;
+    ax->soft_limits = 0;
+    ax->req_fast_stop = ax->req_ack = ax->req_stop = 0;
+    memset(&ax->req_motion, 0, sizeof ax->req_motion);
+    memset(&ax->req_cancelled, 0, sizeof ax->req_cancelled);
+}
+
+static void wsg_axis_done(struct wsg_axis *ax, const struct wsg_motion *m,
+                          uint16_t status)
+{
+    if (m->kind == WSG_MOTION_SNAP || m->kind == WSG_MOTION_NONE)
+        return;
+    if (ax->on_done)
+        ax->on_done(ax->done_ctx, m->tag, m->cmd_id, status);
+}
+
+/* Where pushing with force f in direction dir blocks, if anything blocks
+ * there: the part resists closing with its stiffness. */
+static int wsg_axis_block_at(const struct wsg_axis *ax, double dir, double f,
+                             double *x_block)
+{
+    if (dir < 0 && ax->part &&
+        ax->width >= ax->part_width - f / ax->part_stiffness - WSG_AXIS_EPS) {
+        *x_block = ax->part_width - f / ax->part_stiffness;
+        return 1;
+    }
+    return 0;
+}
+
+/* The contact force at width x while closing. */
+static double wsg_axis_contact_force(const struct wsg_axis *ax, double x)
+{
+    if (ax->part && x < ax->part_width)
+        return ax->part_stiffness * (ax->part_width - x);
+    return 0.0;
+}
+
+static void wsg_axis_start(struct wsg_axis *ax, const struct wsg_motion *m)
+{
+    int decel = m->kind != WSG_MOTION_HOMING;
+
+    ax->motion = *m;
+    wsg_profile_init(&ax->motion.prof, ax->width, m->target, m->speed, ax->acc,
+                     decel);
+    ax->clamping = 0;
+    ax->force = 0.0;
+    if (m->kind == WSG_MOTION_SNAP)
+        return;
+    ax->event_flags &= ~(WSG_SF_AXIS_STOPPED | WSG_SF_TARGET_POS_REACHED |
+                         WSG_SF_BLOCKED_MINUS | WSG_SF_BLOCKED_PLUS);
+    switch (m->kind) {
+    case WSG_MOTION_MOVE:
+        ax->grasp_state = WSG_GS_POSITIONING;
+        break;
+    case WSG_MOTION_GRASP:
+        ax->grasp_state = WSG_GS_GRASPING;
+        break;
+    case WSG_MOTION_RELEASE:
+        ax->grasp_state = WSG_GS_RELEASING;
+        break;
+    default:
+        ax->grasp_state = WSG_GS_IDLE;
+        break;
+    }
+}
+
+/* Motor off: the motion ends where the fingers are. */
+static void wsg_axis_halt(struct wsg_axis *ax)
+{
+    memset(&ax->motion, 0, sizeof ax->motion);
+    ax->speed = 0.0;
+    ax->force = 0.0;
+    ax->clamping = 0;
+}
+
+static void wsg_axis_clamp(struct wsg_axis *ax, double f, double target,
+                           double speed, double dir)
+{
+    ax->clamping = 1;
+    ax->clamp_force = f;
+    ax->clamp_target = target;
+    ax->clamp_speed = speed;
+    ax->clamp_dir = dir < 0 ? -1 : 1;
+    ax->force = f;
+    ax->speed = 0.0;
+    ax->event_flags |= dir < 0 ? WSG_SF_BLOCKED_MINUS : WSG_SF_BLOCKED_PLUS;
+}
+
+/* The motion m blocked at the current width. */
+static void wsg_axis_blocked(struct wsg_axis *ax)
+{
+    struct wsg_motion m = ax->motion;
+    double dir = m.prof.dir, f = ax->force_limit;
+
+    memset(&ax->motion, 0, sizeof ax->motion);
+    ax->speed = 0.0;
+    switch (m.kind) {
+    case WSG_MOTION_HOMING:
+        /* The blocking position is the new origin (3.2.1). */
+        ax->referenced = 1;
+        ax->force = 0.0;
+        ax->grasp_state = WSG_GS_IDLE;
+        wsg_axis_done(ax, &m, WSG_E_SUCCESS);
+        break;
+    case WSG_MOTION_MOVE:
+        ax->grasp_state = WSG_GS_IDLE;
+        if (m.move_flags & WSG_MOVE_STOP_ON_BLOCK) {
+            ax->force = 0.0;
+            ax->event_flags |=
+                dir < 0 ? WSG_SF_BLOCKED_MINUS : WSG_SF_BLOCKED_PLUS;
+        } else {
+            wsg_axis_clamp(ax, f, m.target, m.speed, dir);
+        }
+        wsg_axis_done(ax, &m, WSG_E_AXIS_BLOCKED);
+        break;
+    case WSG_MOTION_GRASP:
+        ax->stats.total++;
+        if (dir < 0 ? ax->width <= m.nominal + ax->cfg.width_tolerance
+                    : ax->width >= m.nominal - ax->cfg.width_tolerance) {
+            ax->grasp_state = WSG_GS_HOLDING;
+            ax->event_flags |= WSG_SF_TARGET_POS_REACHED;
+            wsg_axis_clamp(ax, f, m.target, m.speed, dir);
+            wsg_axis_done(ax, &m, WSG_E_SUCCESS);
+        } else { /* blocked before the part's window: not the part */
+            ax->stats.no_part++;
+            ax->grasp_state = WSG_GS_NO_PART;
+            ax->force = 0.0;
+            ax->event_flags |=
+                dir < 0 ? WSG_SF_BLOCKED_MINUS : WSG_SF_BLOCKED_PLUS;
+            wsg_axis_done(ax, &m, WSG_E_CMD_FAILED);
+        }
+        break;
+    case WSG_MOTION_RELEASE:
+        ax->grasp_state = WSG_GS_IDLE;
+        ax->force = 0.0;
+        ax->event_flags |=
+            dir < 0 ? WSG_SF_BLOCKED_MINUS : WSG_SF_BLOCKED_PLUS;
+        wsg_axis_done(ax, &m, WSG_E_AXIS_BLOCKED);
+        break;
+    case WSG_MOTION_SNAP:
+        /* A clamp found a block again: clamp silently. */
+        wsg_axis_clamp(ax, ax->clamp_force, m.target, m.speed, dir);
+        break;
+    default:
+        break;
+    }
+}
+
+/* The motion reached the end of its profile unblocked. */
+static void wsg_axis_arrived(struct wsg_axis *ax)
+{
+    struct wsg_motion m = ax->motion;
+
+    wsg_axis_halt(ax);
+    switch (m.kind) {
+    case WSG_MOTION_HOMING:
+        ax->referenced = 1;
+        ax->grasp_state = WSG_GS_IDLE;
+        wsg_axis_done(ax, &m, WSG_E_SUCCESS);
+        break;
+    case WSG_MOTION_MOVE:
+    case WSG_MOTION_RELEASE:
+        ax->grasp_state = WSG_GS_IDLE;
+        ax->event_flags |= WSG_SF_TARGET_POS_REACHED;
+        wsg_axis_done(ax, &m, WSG_E_SUCCESS);
+        break;
+    case WSG_MOTION_GRASP:
+        /* Fell through the clamping travel: no part (3.2.6). */
+        ax->stats.total++;
+        ax->stats.no_part++;
+        ax->grasp_state = WSG_GS_NO_PART;
+        wsg_axis_done(ax, &m, WSG_E_CMD_FAILED);
+        break;
+    default:
+        break;
+    }
+}
+
+static void wsg_axis_apply_requests(struct wsg_axis *ax)
+{
+    if (ax->req_cancelled.kind != WSG_MOTION_NONE) {
+        wsg_axis_done(ax, &ax->req_cancelled, WSG_E_CMD_ABORTED);
+        memset(&ax->req_cancelled, 0, sizeof ax->req_cancelled);
+    }
+    if (ax->req_fast_stop) {
+        struct wsg_motion m = ax->motion;
+        ax->req_fast_stop = 0;
+        wsg_axis_halt(ax);
+        ax->fast_stop = 1;
+        ax->grasp_state = WSG_GS_ERROR;
+        wsg_axis_done(ax, &m, WSG_E_CMD_ABORTED);
+    }
+    if (ax->req_ack) {
+        ax->req_ack = 0;
+        if (ax->fast_stop) {
+            ax->fast_stop = 0;
+            ax->grasp_state = WSG_GS_IDLE;
+        }
+    }
+    if (ax->req_stop) {
+        struct wsg_motion m = ax->motion;
+        ax->req_stop = 0;
+        wsg_axis_halt(ax);
+        ax->event_flags |= WSG_SF_AXIS_STOPPED;
+        if (ax->grasp_state != WSG_GS_ERROR)
+            ax->grasp_state = WSG_GS_IDLE;
+        wsg_axis_done(ax, &m, WSG_E_CMD_ABORTED);
+    }
+    if (ax->req_motion.kind != WSG_MOTION_NONE) {
+        struct wsg_motion m = ax->req_motion;
+        memset(&ax->req_motion, 0, sizeof ax->req_motion);
+        wsg_axis_start(ax, &m);
+    }
+}
+
+/* Entering the area beyond a soft limit: FAST STOP at the limit (3.3.5). */
+static int wsg_axis_soft_limit_hit(struct wsg_axis *ax, double x, double v)
+{
+    double limit;
+
+    if (!ax->soft_limits || ax->motion.kind == WSG_MOTION_HOMING)
+        return 0;
+    if (v < 0 && x < ax->soft_minus - WSG_AXIS_EPS &&
+        ax->width >= ax->soft_minus - WSG_AXIS_EPS)
+        limit = ax->soft_minus;
+    else if (v > 0 && x > ax->soft_plus + WSG_AXIS_EPS &&
+             ax->width <= ax->soft_plus + WSG_AXIS_EPS)
+        limit = ax->soft_plus;
+    else
+        return 0;
+    {
+        struct wsg_motion m = ax->motion;
+        wsg_axis_halt(ax);
+        ax->width = limit;
+        ax->fast_stop = 1;
+        ax->grasp_state = WSG_GS_ERROR;
+        wsg_axis_done(ax, &m, WSG_E_RANGE_ERROR);
+    }
+    return 1;
+}
+
+static void wsg_axis_advance(struct wsg_axis *ax, double dt)
+{
+    struct wsg_motion *m = &ax->motion;
+    double x, v, x_block;
+    int over;
+
+    m->prof.t += dt;
+    over = wsg_profile_eval(&m->prof, &x, &v);
+    if (wsg_axis_soft_limit_hit(ax, x, v))
+        return;
+    if (m->kind == WSG_MOTION_HOMING) {
+        /* Homing ends at the mechanical end stop or whatever is before it. */
+        if (v < 0 && ax->part && x <= ax->part_width) {
+            ax->width = ax->part_width;
+            wsg_axis_blocked(ax);
+            return;
+        }
+        ax->width = x;
+        ax->speed = v;
+        if (over)
+            wsg_axis_blocked(ax);
+        return;
+    }
+    if (m->prof.dir < 0 && ax->part) {
+        double f =
+            m->kind == WSG_MOTION_SNAP ? ax->clamp_force : ax->force_limit;
+        x_block = ax->part_width - f / ax->part_stiffness;
+        if (x <= x_block + WSG_AXIS_EPS) {
+            ax->width = x_block;
+            ax->force = f;
+            wsg_axis_blocked(ax);
+            return;
+        }
+    }
+    ax->width = x;
+    ax->speed = v;
+    ax->force = wsg_axis_contact_force(ax, x);
+    if (over)
+        wsg_axis_arrived(ax);
+}
+
+/* A clamping axis holds its block; if the block is gone the fingers snap on
+ * to the target (3.2.2), and a held part is lost (3.4.2). */
+static void wsg_axis_hold(struct wsg_axis *ax)
+{
+    struct wsg_motion snap;
+    double x_block;
+
+    if (wsg_axis_block_at(ax, ax->clamp_dir, ax->clamp_force, &x_block)) {
+        ax->width = x_block;
+        ax->force = ax->clamp_force;
+        return;
+    }
+    if (ax->grasp_state == WSG_GS_HOLDING) {
+        ax->grasp_state = WSG_GS_PART_LOST;
+        ax->stats.lost_part++;
+    }
+    ax->event_flags &= ~(WSG_SF_BLOCKED_MINUS | WSG_SF_BLOCKED_PLUS);
+    memset(&snap, 0, sizeof snap);
+    snap.kind = WSG_MOTION_SNAP;
+    snap.target = ax->clamp_target;
+    snap.speed = ax->clamp_speed;
+    wsg_axis_start(ax, &snap);
+    ax->clamping = 0;
+}
+
+void wsg_axis_step(struct wsg_axis *ax)
+{
+    double dt = ax->cfg.step_us * 1e-6;
+
+    ax->time_us += ax->cfg.step_us;
+    wsg_axis_apply_requests(ax);
+    if (ax->motion.kind != WSG_MOTION_NONE)
+        wsg_axis_advance(ax, dt);
+    else if (ax->clamping)
+        wsg_axis_hold(ax);
+}
+
+int wsg_axis_idle(const struct wsg_axis *ax)
+{
+    double x_block;
+
+    if (ax->motion.kind != WSG_MOTION_NONE || ax->req_fast_stop ||
+        ax->req_ack || ax->req_stop || ax->req_motion.kind ||
+        ax->req_cancelled.kind)
+        return 0;
+    if (ax->clamping &&
+        (!wsg_axis_block_at(ax, ax->clamp_dir, ax->clamp_force, &x_block) ||
+         fabs(x_block - ax->width) > WSG_AXIS_EPS))
+        return 0;
+    return 1;
+}
+
+uint32_t wsg_axis_flags(const struct wsg_axis *ax)
+{
+    uint32_t f = ax->event_flags | ax->faults;
+
+    if (ax->referenced)
+        f |= WSG_SF_REFERENCED;
+    if (ax->motion.kind != WSG_MOTION_NONE)
+        f |= WSG_SF_MOVING;
+    if (ax->soft_limits && ax->width <= ax->soft_minus + WSG_AXIS_EPS)
+        f |= WSG_SF_SOFT_LIMIT_MINUS;
+    if (ax->soft_limits && ax->width >= ax->soft_plus - WSG_AXIS_EPS)
+        f |= WSG_SF_SOFT_LIMIT_PLUS;
+    if (ax->overdrive)
+        f |= WSG_SF_OVERDRIVE_MODE;
+    if (ax->cfg.force_sensor && (ax->grasp_state == WSG_GS_GRASPING ||
+                                 ax->grasp_state == WSG_GS_HOLDING))
+        f |= WSG_SF_FORCECNTL_MODE;
+    if (ax->fast_stop)
+        f |= WSG_SF_FAST_STOP;
+    return f;
+}
+
+int wsg_axis_fast_stopped(const struct wsg_axis *ax)
+{
+    return ax->req_fast_stop || (ax->fast_stop && !ax->req_ack);
+}
+
+int wsg_axis_busy(const struct wsg_axis *ax)
+{
+    if (ax->req_motion.kind != WSG_MOTION_NONE)
+        return 1;
+    if (ax->req_stop || ax->req_fast_stop)
+        return 0;
+    return ax->motion.kind != WSG_MOTION_NONE;
+}
+
+/* A request answered E_CMD_PENDING; the next step starts it. */
+static uint16_t wsg_axis_request(struct wsg_axis *ax, enum wsg_motion_kind k,
+                                 uint8_t id, double target, double speed,
+                                 uint32_t tag)
+{
+    struct wsg_motion *m = &ax->req_motion;
+
+    memset(m, 0, sizeof *m);
+    m->kind = k;
+    m->cmd_id = id;
+    m->tag = tag;
+    m->target = target;
+    m->speed = speed;
+    return WSG_E_CMD_PENDING;
+}
+
+static int wsg_axis_outside_soft_limits(const struct wsg_axis *ax, double w)
+{
+    return ax->soft_limits && (w < ax->soft_minus - WSG_AXIS_EPS ||
+                               w > ax->soft_plus + WSG_AXIS_EPS);
+}
+
+uint16_t wsg_axis_request_homing(struct wsg_axis *ax, int dir, uint32_t tag)
+{
+    double target;
+
+    if (dir == WSG_HOME_DEFAULT)
+        dir = ax->cfg.homing_dir;
+    if (dir != WSG_HOME_POSITIVE && dir != WSG_HOME_NEGATIVE)
+        return WSG_E_INVALID_PARAMETER;
+    target = dir == WSG_HOME_POSITIVE ? ax->cfg.stroke : 0.0;
+    return wsg_axis_request(ax, WSG_MOTION_HOMING, WSG_CMD_HOMING, target,
+                            ax->cfg.homing_speed, tag);
+}
+
+uint16_t wsg_axis_request_move(struct wsg_axis *ax, uint8_t flags,
+                               double width, double speed, uint32_t tag)
+{
+    uint16_t st;
+
+    if (isnan(width) || isnan(speed))
+        return WSG_E_INVALID_PARAMETER;
+    if (flags & WSG_MOVE_RELATIVE)
+        width += ax->width;
+    width = wsg_clamp(width, 0.0, ax->cfg.stroke);
+    if (wsg_axis_outside_soft_limits(ax, width))
+        return WSG_E_RANGE_ERROR;
+    speed = wsg_clamp(speed, ax->cfg.min_speed, ax->cfg.max_speed);
+    st = wsg_axis_request(ax, WSG_MOTION_MOVE, WSG_CMD_PREPOSITION, width,
+                          speed, tag);
+    ax->req_motion.move_flags = flags;
+    return st;
+}
+
+uint16_t wsg_axis_request_grasp(struct wsg_axis *ax, double width,
+                                double speed, uint32_t tag)
+{
+    double target;
+    uint16_t st;
+
+    if (isnan(width) || isnan(speed))
+        return WSG_E_INVALID_PARAMETER;
+    width = wsg_clamp(width, 0.0, ax->cfg.stroke);
+    if (wsg_axis_outside_soft_limits(ax, width))
+        return WSG_E_RANGE_ERROR;
+    speed = wsg_clamp(speed, ax->cfg.min_speed, ax->cfg.max_speed);
+    /* Close onto a part narrower than the fingers, open into a part around
+     * them, in both cases through the clamping travel beyond it. */
+    target = width <= ax->width ? width - ax->cfg.clamp_travel
+                                : width + ax->cfg.clamp_travel;
+    target = wsg_clamp(target, 0.0, ax->cfg.stroke);
+    st = wsg_axis_request(ax, WSG_MOTION_GRASP, WSG_CMD_GRASP, target, speed,
+                          tag);
+    ax->req_motion.nominal = width;
+    return st;
+}
+
+uint16_t wsg_axis_request_release(struct wsg_axis *ax, double width,
+                                  double speed, uint32_t tag)
+{
+    if (isnan(width) || isnan(speed))
+        return WSG_E_INVALID_PARAMETER;
+    width = wsg_clamp(width, 0.0, ax->cfg.stroke);
+    if (wsg_axis_outside_soft_limits(ax, width))
+        return WSG_E_RANGE_ERROR;
+    speed = wsg_clamp(speed, ax->cfg.min_speed, ax->cfg.max_speed);
+    return wsg_axis_request(ax, WSG_MOTION_RELEASE, WSG_CMD_RELEASE, width,
+                            speed, tag);
+}
+
+/* A motion accepted in this step but not started owes an E_CMD_ABORTED. */
+static void wsg_axis_cancel_request(struct wsg_axis *ax)
+{
+    if (ax->req_motion.kind == WSG_MOTION_NONE)
+        return;
+    ax->req_cancelled = ax->req_motion;
+    memset(&ax->req_motion, 0, sizeof ax->req_motion);
+}
+
+void wsg_axis_request_stop(struct wsg_axis *ax)
+{
+    wsg_axis_cancel_request(ax);
+    ax->req_stop = 1;
+}
+
+void wsg_axis_request_fast_stop(struct wsg_axis *ax)
+{
+    wsg_axis_cancel_request(ax);
+    ax->req_fast_stop = 1;
+    ax->req_ack = 0; /* an acknowledge before it does not clear it */
+}
+
+void wsg_axis_request_ack(struct wsg_axis *ax)
+{
+    ax->req_ack = 1;
+}
+
+void wsg_axis_set_acc(struct wsg_axis *ax, double acc)
+{
+    if (isnan(acc))
+        return;
+    ax->acc = wsg_clamp(acc, ax->cfg.min_acc, ax->cfg.max_acc);
+}
+
+void wsg_axis_set_force_limit(struct wsg_axis *ax, double force)
+{
+    double max = ax->overdrive ? ax->cfg.ovr_force : ax->cfg.nom_force;
+
+    if (isnan(force))
+        return;
+    ax->force_limit = wsg_clamp(force, ax->cfg.min_force, max);
+}
+
+void wsg_axis_set_overdrive(struct wsg_axis *ax, int on)
+{
+    ax->overdrive = on ? 1 : 0;
+    /* Leaving overdrive reduces a limit above nominal (3.3.8). */
+    if (!on && ax->force_limit > ax->cfg.nom_force)
+        ax->force_limit = ax->cfg.nom_force;
+}
+
+void wsg_axis_set_soft_limits(struct wsg_axis *ax, double minus, double plus)
+{
+    ax->soft_limits = 1;
+    ax->soft_minus = minus;
+    ax->soft_plus = plus;
+}
+
+void wsg_axis_clear_soft_limits(struct wsg_axis *ax)
+{
+    ax->soft_limits = 0;
+}
+
+void wsg_axis_set_part(struct wsg_axis *ax, double width, double stiffness)
+{
+    if (width < 0 || isnan(width)) {
+        ax->part = 0;
+        return;
+    }
+    ax->part = 1;
+    ax->part_width = width;
+    ax->part_stiffness = stiffness > 0 ? stiffness : ax->cfg.part_stiffness;
+}
+
+void wsg_axis_set_fault(struct wsg_axis *ax, uint32_t fault, int on)
+{
+    fault &= WSG_FAULTS;
+    if (on)
+        ax->faults |= fault;
+    else
+        ax->faults &= ~fault;
+}

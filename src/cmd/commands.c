@@ -1,0 +1,426 @@
+/*
+ * The command handlers and the dispatch table.
+ *
+ * By the time a handler runs, the dispatcher has checked the payload length
+ * and the gripper's state against the command's table entry. Handlers
+ * decode their parameters, refuse undefined values, and either answer from
+ * the model or record a request for the next step (motion commands answer
+ * E_CMD_PENDING; their final result comes from the model).
+ */
+#include <math.h>
+#include <string.h>
+
+#include "cmd.h"
+
+static uint16_t wsg_cmd_loop(struct wsg_device *d, struct wsg_session *s,
+                             const struct wsg_frame *f, struct wsg_reply *r)
+{
+    (void)d;
+    (void)s;
+    memcpy(r->params, f->payload, f->len);
+    r->len = f->len;
+    return WSG_E_SUCCESS;
+}
+
+static uint16_t wsg_cmd_disconnect(struct wsg_device *d, struct wsg_session *s,
+                                   const struct wsg_frame *f,
+                                   struct wsg_reply *r)
+{
+    (void)f;
+    (void)r;
+    if (!(s->flags & WSG_SESSION_CONNECTION))
+        return WSG_E_NOT_AVAILABLE;
+    s->announced = 1;
+    /* 3.1.2: a movement in progress is aborted immediately. */
+    if (d->axis.motion.kind != WSG_MOTION_NONE || wsg_axis_busy(&d->axis))
+        wsg_axis_request_stop(&d->axis);
+    return WSG_E_SUCCESS;
+}
+
+static uint16_t wsg_cmd_homing(struct wsg_device *d, struct wsg_session *s,
+                               const struct wsg_frame *f, struct wsg_reply *r)
+{
+    (void)r;
+    return wsg_axis_request_homing(&d->axis, f->payload[0], s->tag);
+}
+
+static uint16_t wsg_cmd_preposition(struct wsg_device *d,
+                                    struct wsg_session *s,
+                                    const struct wsg_frame *f,
+                                    struct wsg_reply *r)
+{
+    uint8_t flags = f->payload[0];
+
+    (void)r;
+    if (flags & ~(WSG_MOVE_RELATIVE | WSG_MOVE_STOP_ON_BLOCK))
+        return WSG_E_INVALID_PARAMETER;
+    return wsg_axis_request_move(&d->axis, flags, wsg_get_f32(f->payload + 1),
+                                 wsg_get_f32(f->payload + 5), s->tag);
+}
+
+static uint16_t wsg_cmd_stop(struct wsg_device *d, struct wsg_session *s,
+                             const struct wsg_frame *f, struct wsg_reply *r)
+{
+    (void)s;
+    (void)f;
+    (void)r;
+    wsg_axis_request_stop(&d->axis);
+    return WSG_E_SUCCESS;
+}
+
+static uint16_t wsg_cmd_fast_stop(struct wsg_device *d, struct wsg_session *s,
+                                  const struct wsg_frame *f,
+                                  struct wsg_reply *r)
+{
+    (void)s;
+    (void)f;
+    (void)r;
+    wsg_axis_request_fast_stop(&d->axis);
+    return WSG_E_SUCCESS;
+}
+
+static uint16_t wsg_cmd_ack(struct wsg_device *d, struct wsg_session *s,
+                            const struct wsg_frame *f, struct wsg_reply *r)
+{
+    (void)s;
+    (void)r;
+    if (memcmp(f->payload, "ack", 3) != 0)
+        return WSG_E_CMD_FORMAT_ERROR; /* 3.2.5: wrong key */
+    /* Nothing to acknowledge is still a success: drivers send it blindly. */
+    wsg_axis_request_ack(&d->axis);
+    return WSG_E_SUCCESS;
+}
+
+static uint16_t wsg_cmd_grasp(struct wsg_device *d, struct wsg_session *s,
+                              const struct wsg_frame *f, struct wsg_reply *r)
+{
+    (void)r;
+    return wsg_axis_request_grasp(&d->axis, wsg_get_f32(f->payload),
+                                  wsg_get_f32(f->payload + 4), s->tag);
+}
+
+static uint16_t wsg_cmd_release(struct wsg_device *d, struct wsg_session *s,
+                                const struct wsg_frame *f, struct wsg_reply *r)
+{
+    (void)r;
+    return wsg_axis_request_release(&d->axis, wsg_get_f32(f->payload),
+                                    wsg_get_f32(f->payload + 4), s->tag);
+}
+
+static uint16_t wsg_reply_f32(struct wsg_reply *r, double v)
+{
+    wsg_put_f32(r->params + r->len, (float)v);
+    r->len += 4;
+    return WSG_E_SUCCESS;
+}
+
+static uint16_t wsg_cmd_set_acc(struct wsg_device *d, struct wsg_session *s,
+                                const struct wsg_frame *f, struct wsg_reply *r)
+{
+    float acc = wsg_get_f32(f->payload);
+
+    (void)s;
+    (void)r;
+    if (isnan(acc))
+        return WSG_E_INVALID_PARAMETER;
+    wsg_axis_set_acc(&d->axis, acc);
+    return WSG_E_SUCCESS;
+}
+
+static uint16_t wsg_cmd_get_acc(struct wsg_device *d, struct wsg_session *s,
+                                const struct wsg_frame *f, struct wsg_reply *r)
+{
+    (void)s;
+    (void)f;
+    return wsg_reply_f32(r, d->axis.acc);
+}
+
+static uint16_t wsg_cmd_set_force(struct wsg_device *d, struct wsg_session *s,
+                                  const struct wsg_frame *f,
+                                  struct wsg_reply *r)
+{
+    float force = wsg_get_f32(f->payload);
+
+    (void)s;
+    (void)r;
+    if (isnan(force))
+        return WSG_E_INVALID_PARAMETER;
+    wsg_axis_set_force_limit(&d->axis, force);
+    return WSG_E_SUCCESS;
+}
+
+static uint16_t wsg_cmd_get_force_limit(struct wsg_device *d,
+                                        struct wsg_session *s,
+                                        const struct wsg_frame *f,
+                                        struct wsg_reply *r)
+{
+    (void)s;
+    (void)f;
+    return wsg_reply_f32(r, d->axis.force_limit);
+}
+
+static uint16_t wsg_cmd_set_soft_limits(struct wsg_device *d,
+                                        struct wsg_session *s,
+                                        const struct wsg_frame *f,
+                                        struct wsg_reply *r)
+{
+    float minus = wsg_get_f32(f->payload), plus = wsg_get_f32(f->payload + 4);
+
+    (void)s;
+    (void)r;
+    if (isnan(minus) || isnan(plus) || minus > plus)
+        return WSG_E_INVALID_PARAMETER;
+    wsg_axis_set_soft_limits(&d->axis, minus, plus);
+    return WSG_E_SUCCESS;
+}
+
+static uint16_t wsg_cmd_get_soft_limits(struct wsg_device *d,
+                                        struct wsg_session *s,
+                                        const struct wsg_frame *f,
+                                        struct wsg_reply *r)
+{
+    (void)s;
+    (void)f;
+    if (!d->axis.soft_limits)
+        return WSG_E_NOT_AVAILABLE;
+    wsg_reply_f32(r, d->axis.soft_minus);
+    return wsg_reply_f32(r, d->axis.soft_plus);
+}
+
+static uint16_t wsg_cmd_clear_soft_limits(struct wsg_device *d,
+                                          struct wsg_session *s,
+                                          const struct wsg_frame *f,
+                                          struct wsg_reply *r)
+{
+    (void)s;
+    (void)f;
+    (void)r;
+    wsg_axis_clear_soft_limits(&d->axis);
+    return WSG_E_SUCCESS;
+}
+
+static uint16_t wsg_cmd_overdrive(struct wsg_device *d, struct wsg_session *s,
+                                  const struct wsg_frame *f,
+                                  struct wsg_reply *r)
+{
+    (void)s;
+    (void)r;
+    if (f->payload[0] & ~1u)
+        return WSG_E_INVALID_PARAMETER;
+    wsg_axis_set_overdrive(&d->axis, f->payload[0] & 1u);
+    return WSG_E_SUCCESS;
+}
+
+static uint16_t wsg_cmd_tare(struct wsg_device *d, struct wsg_session *s,
+                             const struct wsg_frame *f, struct wsg_reply *r)
+{
+    (void)s;
+    (void)f;
+    (void)r;
+    if (!d->axis.cfg.force_sensor)
+        return WSG_E_NOT_AVAILABLE;
+    if (d->axis.grasp_state == WSG_GS_HOLDING)
+        return WSG_E_ACCESS_DENIED; /* in force control mode */
+    return WSG_E_SUCCESS;
+}
+
+static enum wsg_stream_id wsg_stream_of(uint8_t id)
+{
+    switch (id) {
+    case WSG_CMD_GET_SYSTEM_STATE:
+        return WSG_STREAM_SYSTEM_STATE;
+    case WSG_CMD_GET_GRASP_STATE:
+        return WSG_STREAM_GRASP_STATE;
+    case WSG_CMD_GET_WIDTH:
+        return WSG_STREAM_WIDTH;
+    case WSG_CMD_GET_SPEED:
+        return WSG_STREAM_SPEED;
+    default:
+        return WSG_STREAM_FORCE;
+    }
+}
+
+/* 40h, 41h, 43h, 44h, 45h: a value now, and with FLAGS D0 a stream of it. */
+static uint16_t wsg_cmd_stream(struct wsg_device *d, struct wsg_session *s,
+                               const struct wsg_frame *f, struct wsg_reply *r)
+{
+    enum wsg_stream_id sid = wsg_stream_of(f->id);
+    struct wsg_stream *st = &s->streams[sid];
+    float value;
+
+    r->len = wsg_stream_value(d, sid, r->params, &value);
+    if (f->len == 0)
+        return WSG_E_SUCCESS; /* a one-time read */
+    if (f->payload[0] & ~3u)
+        return WSG_E_INVALID_PARAMETER;
+    if (st->on)
+        s->nstreams--;
+    st->on = f->payload[0] & 1u;
+    if (!st->on)
+        return WSG_E_SUCCESS;
+    s->nstreams++;
+    st->change_only = (f->payload[0] >> 1) & 1u;
+    /* PERIOD_MS 0 means as often as the model steps. */
+    st->period_us = 1000u * wsg_get_u16(f->payload + 1);
+    if (st->period_us < d->axis.cfg.step_us)
+        st->period_us = d->axis.cfg.step_us;
+    st->due_us = d->axis.time_us + st->period_us;
+    st->last = value;
+    return WSG_E_SUCCESS;
+}
+
+static uint16_t wsg_cmd_grasp_stats(struct wsg_device *d,
+                                    struct wsg_session *s,
+                                    const struct wsg_frame *f,
+                                    struct wsg_reply *r)
+{
+    struct wsg_grasp_stats *gs = &d->axis.stats;
+
+    (void)s;
+    if (f->len && (f->payload[0] & ~1u))
+        return WSG_E_INVALID_PARAMETER;
+    wsg_put_u32(r->params, gs->total);
+    wsg_put_u16(r->params + 4, gs->no_part);
+    wsg_put_u16(r->params + 6, gs->lost_part);
+    r->len = 8;
+    if (f->len && (f->payload[0] & 1u))
+        memset(gs, 0, sizeof *gs); /* reset after reading */
+    return WSG_E_SUCCESS;
+}
+
+static uint16_t wsg_cmd_temperature(struct wsg_device *d,
+                                    struct wsg_session *s,
+                                    const struct wsg_frame *f,
+                                    struct wsg_reply *r)
+{
+    (void)s;
+    (void)f;
+    wsg_put_u16(r->params,
+                (uint16_t)(int16_t)lround(d->axis.temperature * 10));
+    r->len = 2;
+    return WSG_E_SUCCESS;
+}
+
+static uint16_t wsg_cmd_system_info(struct wsg_device *d,
+                                    struct wsg_session *s,
+                                    const struct wsg_frame *f,
+                                    struct wsg_reply *r)
+{
+    (void)s;
+    (void)f;
+    r->params[0] = d->info.type;
+    r->params[1] = d->info.hwrev;
+    wsg_put_u16(r->params + 2, d->info.swrev);
+    wsg_put_u32(r->params + 4, d->info.serial);
+    r->len = 8;
+    return WSG_E_SUCCESS;
+}
+
+static uint16_t wsg_cmd_set_tag(struct wsg_device *d, struct wsg_session *s,
+                                const struct wsg_frame *f, struct wsg_reply *r)
+{
+    size_t n = f->len, i;
+
+    (void)s;
+    (void)r;
+    while (n && f->payload[n - 1] == 0)
+        n--; /* trailing NULs are stripped (3.5.2) */
+    if (n > WSG_TAG_MAX)
+        return WSG_E_OVERRUN;
+    for (i = 0; i < n; i++)
+        if (f->payload[i] < 0x20 || f->payload[i] >= 0x7F)
+            return WSG_E_INVALID_PARAMETER; /* control or non-ASCII */
+    memcpy(d->tag, f->payload, n);
+    d->tag[n] = '\0';
+    d->tag_len = n;
+    return WSG_E_SUCCESS;
+}
+
+static uint16_t wsg_cmd_get_tag(struct wsg_device *d, struct wsg_session *s,
+                                const struct wsg_frame *f, struct wsg_reply *r)
+{
+    (void)s;
+    (void)f;
+    if (!d->tag_len)
+        return WSG_E_NOT_AVAILABLE;
+    memcpy(r->params, d->tag, d->tag_len);
+    r->len = d->tag_len;
+    return WSG_E_SUCCESS;
+}
+
+static uint16_t wsg_cmd_system_limits(struct wsg_device *d,
+                                      struct wsg_session *s,
+                                      const struct wsg_frame *f,
+                                      struct wsg_reply *r)
+{
+    const struct wsg_axis_config *c = &d->axis.cfg;
+
+    (void)s;
+    (void)f;
+    wsg_reply_f32(r, c->stroke);
+    wsg_reply_f32(r, c->min_speed);
+    wsg_reply_f32(r, c->max_speed);
+    wsg_reply_f32(r, c->min_acc);
+    wsg_reply_f32(r, c->max_acc);
+    wsg_reply_f32(r, c->min_force);
+    wsg_reply_f32(r, c->nom_force);
+    return wsg_reply_f32(r, c->ovr_force);
+}
+
+const struct wsg_cmd_desc wsg_cmd_table[256] = {
+    [WSG_CMD_LOOP] = {"Loop", wsg_cmd_loop, 0, WSG_PAYLOAD_MAX, 0},
+    [WSG_CMD_DISCONNECT] = {"Disconnect", wsg_cmd_disconnect, 0, 0,
+                            WSG_CMDF_NO_PARAM},
+    [WSG_CMD_HOMING] = {"Homing", wsg_cmd_homing, 1, 1, WSG_CMDF_MOVE},
+    [WSG_CMD_PREPOSITION] = {"Preposition", wsg_cmd_preposition, 9, 9,
+                             WSG_CMDF_MOVE | WSG_CMDF_HOMED},
+    [WSG_CMD_STOP] = {"Stop", wsg_cmd_stop, 0, 0, WSG_CMDF_NO_PARAM},
+    /* An emergency stop is never refused for its payload. */
+    [WSG_CMD_FAST_STOP] = {"FastStop", wsg_cmd_fast_stop, 0, WSG_PAYLOAD_MAX,
+                           0},
+    [WSG_CMD_ACK_FAST_STOP] = {"AckFastStop", wsg_cmd_ack, 3, 3, 0},
+    [WSG_CMD_GRASP] = {"Grasp", wsg_cmd_grasp, 8, 8,
+                       WSG_CMDF_MOVE | WSG_CMDF_HOMED},
+    [WSG_CMD_RELEASE] = {"Release", wsg_cmd_release, 8, 8,
+                         WSG_CMDF_MOVE | WSG_CMDF_HOMED},
+    [WSG_CMD_SET_ACCELERATION] = {"SetAcceleration", wsg_cmd_set_acc, 4, 4, 0},
+    [WSG_CMD_GET_ACCELERATION] = {"GetAcceleration", wsg_cmd_get_acc, 0, 0,
+                                  WSG_CMDF_NO_PARAM},
+    [WSG_CMD_SET_FORCE_LIMIT] = {"SetForceLimit", wsg_cmd_set_force, 4, 4, 0},
+    [WSG_CMD_GET_FORCE_LIMIT] = {"GetForceLimit", wsg_cmd_get_force_limit, 0,
+                                 0, WSG_CMDF_NO_PARAM},
+    [WSG_CMD_SET_SOFT_LIMITS] = {"SetSoftLimits", wsg_cmd_set_soft_limits, 8,
+                                 8, 0},
+    [WSG_CMD_GET_SOFT_LIMITS] = {"GetSoftLimits", wsg_cmd_get_soft_limits, 0,
+                                 0, WSG_CMDF_NO_PARAM},
+    [WSG_CMD_CLEAR_SOFT_LIMITS] = {"ClearSoftLimits",
+                                   wsg_cmd_clear_soft_limits, 0, 0,
+                                   WSG_CMDF_NO_PARAM},
+    [WSG_CMD_OVERDRIVE] = {"OverdriveMode", wsg_cmd_overdrive, 1, 1, 0},
+    [WSG_CMD_TARE] = {"TareForceSensor", wsg_cmd_tare, 0, 0,
+                      WSG_CMDF_NO_PARAM},
+    [WSG_CMD_GET_SYSTEM_STATE] = {"GetSystemState", wsg_cmd_stream, 3, 3,
+                                  WSG_CMDF_EMPTY_OK},
+    [WSG_CMD_GET_GRASP_STATE] = {"GetGraspingState", wsg_cmd_stream, 3, 3,
+                                 WSG_CMDF_EMPTY_OK},
+    [WSG_CMD_GET_GRASP_STATS] = {"GetGraspingStatistics", wsg_cmd_grasp_stats,
+                                 1, 1, WSG_CMDF_EMPTY_OK},
+    [WSG_CMD_GET_WIDTH] = {"GetOpeningWidth", wsg_cmd_stream, 3, 3,
+                           WSG_CMDF_EMPTY_OK},
+    [WSG_CMD_GET_SPEED] = {"GetSpeed", wsg_cmd_stream, 3, 3,
+                           WSG_CMDF_EMPTY_OK},
+    [WSG_CMD_GET_FORCE] = {"GetForce", wsg_cmd_stream, 3, 3,
+                           WSG_CMDF_EMPTY_OK},
+    [WSG_CMD_GET_TEMPERATURE] = {"GetTemperature", wsg_cmd_temperature, 0, 0,
+                                 WSG_CMDF_NO_PARAM},
+    [WSG_CMD_GET_SYSTEM_INFO] = {"GetSystemInformation", wsg_cmd_system_info,
+                                 0, 0, WSG_CMDF_NO_PARAM},
+    /* Longer than 64 characters is E_OVERRUN, not a format error; trailing
+     * NULs do not count, so the whole payload range is the handler's. */
+    [WSG_CMD_SET_DEVICE_TAG] = {"SetDeviceTag", wsg_cmd_set_tag, 0,
+                                WSG_PAYLOAD_MAX, 0},
+    [WSG_CMD_GET_DEVICE_TAG] = {"GetDeviceTag", wsg_cmd_get_tag, 0, 0,
+                                WSG_CMDF_NO_PARAM},
+    [WSG_CMD_GET_SYSTEM_LIMITS] = {"GetSystemLimits", wsg_cmd_system_limits, 0,
+                                   0, WSG_CMDF_NO_PARAM},
+};

@@ -1,0 +1,188 @@
+/*
+ * The device: one gripper's model, its stored data, and the sessions that
+ * talk to it.
+ *
+ * Replies leave through the asking session's send callback, one call per
+ * packet. Final results of motion commands come out of the model's step
+ * with the tag of the session that asked; the transport's lookup turns the
+ * tag back into a session, or NULL if the peer is gone and the result has
+ * no one to go to. Streams are polled after each step against simulated
+ * time, so they keep their period under any time scale.
+ */
+#include <math.h>
+#include <string.h>
+
+#include "cmd.h"
+
+/* Change thresholds of 3.4.4 to 3.4.6; flags and states: any change. */
+static const float wsg_stream_threshold[WSG_STREAM_COUNT] = {
+    [WSG_STREAM_SYSTEM_STATE] = 0.5f, [WSG_STREAM_GRASP_STATE] = 0.5f,
+    [WSG_STREAM_WIDTH] = 0.01f,       [WSG_STREAM_SPEED] = 0.05f,
+    [WSG_STREAM_FORCE] = 0.05f,
+};
+
+static const uint8_t wsg_stream_cmd[WSG_STREAM_COUNT] = {
+    WSG_CMD_GET_SYSTEM_STATE, WSG_CMD_GET_GRASP_STATE, WSG_CMD_GET_WIDTH,
+    WSG_CMD_GET_SPEED, WSG_CMD_GET_FORCE};
+
+static void wsg_device_done(void *ctx, uint32_t tag, uint8_t cmd_id,
+                            uint16_t status)
+{
+    struct wsg_device *d = ctx;
+    struct wsg_session *s = d->lookup ? d->lookup(d->lookup_ctx, tag) : NULL;
+
+    if (s)
+        wsg_device_reply(d, s, cmd_id, status, NULL, 0);
+    else
+        d->cmd_failure = status != WSG_E_SUCCESS;
+}
+
+void wsg_device_init(struct wsg_device *d, const struct wsg_axis_config *cfg)
+{
+    memset(d, 0, sizeof *d);
+    wsg_axis_init(&d->axis, cfg, wsg_device_done, d);
+    d->info.type = cfg->type;
+    d->info.hwrev = 1;
+    d->info.swrev = 0x2200; /* firmware 2.2.0 */
+    d->info.serial = 1;
+    d->disconnect_fast_stop = 1;
+}
+
+void wsg_device_reset(struct wsg_device *d)
+{
+    wsg_axis_reset(&d->axis);
+    d->cmd_failure = 0;
+}
+
+void wsg_session_init(struct wsg_session *s, uint32_t tag, unsigned flags,
+                      wsg_send_fn send, void *ctx)
+{
+    memset(s, 0, sizeof *s);
+    s->tag = tag;
+    s->flags = flags;
+    s->send = send;
+    s->ctx = ctx;
+}
+
+void wsg_device_session_closed(struct wsg_device *d, struct wsg_session *s)
+{
+    if ((s->flags & WSG_SESSION_CONNECTION) && !s->announced &&
+        d->disconnect_fast_stop)
+        wsg_axis_request_fast_stop(&d->axis);
+    s->nstreams = 0;
+    memset(s->streams, 0, sizeof s->streams);
+}
+
+void wsg_device_reply(struct wsg_device *d, struct wsg_session *s, uint8_t id,
+                      uint16_t status, const uint8_t *params, size_t len)
+{
+    uint8_t pkt[WSG_FRAME_MAX];
+    size_t n =
+        wsg_frame_encode_reply(pkt, sizeof pkt, id, status, params, len);
+
+    if (status != WSG_E_CMD_PENDING)
+        d->cmd_failure = status != WSG_E_SUCCESS;
+    if (n)
+        s->send(s, pkt, n);
+}
+
+void wsg_device_input(struct wsg_device *d, struct wsg_session *s,
+                      struct wsg_parser *p, const uint8_t *data, size_t len)
+{
+    while (len) {
+        enum wsg_parse_event ev;
+        struct wsg_frame f;
+        size_t n = wsg_parser_feed(p, data, len, &ev, &f);
+
+        data += n;
+        len -= n;
+        switch (ev) {
+        case WSG_PARSE_FRAME:
+            wsg_device_dispatch(d, s, &f);
+            break;
+        case WSG_PARSE_BAD_CRC:
+            wsg_device_reply(d, s, f.id, WSG_E_CHECKSUM_ERROR, NULL, 0);
+            break;
+        case WSG_PARSE_OVERSIZE:
+            wsg_device_reply(d, s, f.id, WSG_E_CMD_FORMAT_ERROR, NULL, 0);
+            break;
+        default:
+            break;
+        }
+    }
+}
+
+size_t wsg_stream_value(const struct wsg_device *d, enum wsg_stream_id sid,
+                        uint8_t *out, float *value)
+{
+    const struct wsg_axis *ax = &d->axis;
+    uint32_t flags;
+
+    switch (sid) {
+    case WSG_STREAM_SYSTEM_STATE:
+        flags = wsg_axis_flags(ax) | (d->cmd_failure ? WSG_SF_CMD_FAILURE : 0);
+        wsg_put_u32(out, flags);
+        *value = (float)flags; /* exact: the flags stay below 2^24 */
+        return 4;
+    case WSG_STREAM_GRASP_STATE:
+        out[0] = (uint8_t)ax->grasp_state;
+        *value = (float)ax->grasp_state;
+        return 1;
+    case WSG_STREAM_WIDTH:
+        *value = (float)ax->width;
+        break;
+    case WSG_STREAM_SPEED:
+        *value = (float)ax->speed;
+        break;
+    default:
+        *value = (float)ax->force;
+        break;
+    }
+    wsg_put_f32(out, *value);
+    return 4;
+}
+
+void wsg_device_poll_streams(struct wsg_device *d, struct wsg_session *s)
+{
+    uint64_t now = d->axis.time_us;
+    unsigned i;
+
+    for (i = 0; i < WSG_STREAM_COUNT && s->nstreams; i++) {
+        struct wsg_stream *st = &s->streams[i];
+        uint8_t params[4];
+        uint8_t pkt[WSG_HEADER_LEN + 2 + sizeof params + WSG_CRC_LEN];
+        float value;
+        size_t len, n;
+
+        if (!st->on || now < st->due_us)
+            continue;
+        len = wsg_stream_value(d, (enum wsg_stream_id)i, params, &value);
+        /* Change-only: the period is a minimum interval; a change after
+         * a quiet spell goes out at once. */
+        if (st->change_only &&
+            fabsf(value - st->last) < wsg_stream_threshold[i])
+            continue;
+        st->last = value;
+        st->due_us += st->period_us;
+        if (st->due_us <= now)
+            st->due_us = now + st->period_us;
+        n = wsg_frame_encode_reply(pkt, sizeof pkt, wsg_stream_cmd[i],
+                                   WSG_E_SUCCESS, params, len);
+        s->send(s, pkt, n);
+    }
+}
+
+void wsg_device_step(struct wsg_device *d)
+{
+    wsg_axis_step(&d->axis);
+}
+
+int wsg_device_idle(const struct wsg_device *d)
+{
+    return wsg_axis_idle(&d->axis);
+}
+
+void wsg_device_advance_idle(struct wsg_device *d, uint64_t nsteps)
+{
+    d->axis.time_us += nsteps * d->axis.cfg.step_us;
+}

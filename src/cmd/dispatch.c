@@ -1,0 +1,56 @@
+/*
+ * The dispatcher: everything the manual says about a command's length and
+ * about the gripper's state (FAST STOP, not referenced, already moving) is
+ * checked here, once, from the command's table entry, in the order the
+ * manual's error lists imply. Handlers only deal with their parameters.
+ */
+#include "cmd.h"
+
+const char *wsg_cmd_name(uint8_t id)
+{
+    return wsg_cmd_table[id].name;
+}
+
+static uint16_t wsg_cmd_check(const struct wsg_device *d,
+                              const struct wsg_session *s,
+                              const struct wsg_cmd_desc *c,
+                              const struct wsg_frame *f)
+{
+    const struct wsg_axis *ax = &d->axis;
+
+    if (s->announced)
+        return WSG_E_ACCESS_DENIED; /* 3.1.2: waiting for the close */
+    if (!c->handler)
+        return WSG_E_CMD_UNKNOWN;
+    if ((f->len < c->min_len || f->len > c->max_len) &&
+        !(f->len == 0 && (c->flags & WSG_CMDF_EMPTY_OK)))
+        return (c->flags & WSG_CMDF_NO_PARAM) ? WSG_E_NO_PARAM_EXPECTED
+                                              : WSG_E_CMD_FORMAT_ERROR;
+    if (c->flags & WSG_CMDF_MOTION) {
+        if (wsg_axis_fast_stopped(ax))
+            return WSG_E_ACCESS_DENIED;
+        /* Appendix B: a fault disables all movement-related commands. */
+        if (ax->faults & WSG_FAULTS_BLOCKING)
+            return WSG_E_ACCESS_DENIED;
+    }
+    if ((c->flags & WSG_CMDF_HOMED) && !ax->referenced)
+        return WSG_E_NOT_INITIALIZED;
+    if ((c->flags & WSG_CMDF_ASYNC) && wsg_axis_busy(ax))
+        return WSG_E_ALREADY_RUNNING;
+    return WSG_E_SUCCESS;
+}
+
+void wsg_device_dispatch(struct wsg_device *d, struct wsg_session *s,
+                         const struct wsg_frame *f)
+{
+    const struct wsg_cmd_desc *c = &wsg_cmd_table[f->id];
+    struct wsg_reply r;
+    uint16_t st;
+
+    r.len = 0;
+    st = wsg_cmd_check(d, s, c, f);
+    if (st == WSG_E_SUCCESS)
+        st = c->handler(d, s, f, &r);
+    wsg_device_reply(d, s, f->id, st, r.params,
+                     st == WSG_E_SUCCESS ? r.len : 0);
+}
