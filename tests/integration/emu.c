@@ -1,0 +1,785 @@
+/*
+ * Client library of the integration tests (see emu.h): the daemon as a
+ * child process, the TCP transport, and framing over any transport with the
+ * core's wsg_parser.
+ *
+ * Daemons started here are registered and killed at exit, so a test that
+ * stops early (REQUIRE) leaves no process behind; on Linux the child also
+ * gets SIGKILL if the test process dies (ctest's timeout).
+ */
+#define _GNU_SOURCE /* prctl(PR_SET_PDEATHSIG) */
+
+#include "emu.h"
+
+#include <errno.h>
+#include <fcntl.h>
+#include <netdb.h>
+#include <netinet/in.h>
+#include <netinet/tcp.h>
+#include <poll.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/socket.h>
+#include <sys/wait.h>
+#include <time.h>
+#include <unistd.h>
+#ifdef __linux__
+#include <sys/prctl.h>
+#endif
+
+/* ---- time ---- */
+
+double emu_now_ms(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec * 1e3 + (double)ts.tv_nsec / 1e6;
+}
+
+void emu_sleep_ms(int ms)
+{
+    struct timespec ts;
+    ts.tv_sec = ms / 1000;
+    ts.tv_nsec = (long)(ms % 1000) * 1000000L;
+    while (nanosleep(&ts, &ts) != 0 && errno == EINTR)
+        ;
+}
+
+/* Milliseconds left until deadline, never negative. */
+static int remaining_ms(double deadline)
+{
+    double left = deadline - emu_now_ms();
+    return left > 0 ? (int)(left + 0.999) : 0;
+}
+
+/* ---- children: registered for the exit handler ---- */
+
+#define MAX_CHILDREN 16
+static pid_t children[MAX_CHILDREN];
+static int cleanup_registered;
+
+static void kill_children(void)
+{
+    for (int i = 0; i < MAX_CHILDREN; i++) {
+        if (children[i] > 0) {
+            kill(children[i], SIGKILL);
+            waitpid(children[i], NULL, 0);
+            children[i] = 0;
+        }
+    }
+}
+
+static void child_add(pid_t pid)
+{
+    if (!cleanup_registered) {
+        atexit(kill_children);
+        cleanup_registered = 1;
+    }
+    for (int i = 0; i < MAX_CHILDREN; i++) {
+        if (children[i] == 0) {
+            children[i] = pid;
+            return;
+        }
+    }
+}
+
+static void child_remove(pid_t pid)
+{
+    for (int i = 0; i < MAX_CHILDREN; i++)
+        if (children[i] == pid)
+            children[i] = 0;
+}
+
+static void set_cloexec(int fd)
+{
+    fcntl(fd, F_SETFD, fcntl(fd, F_GETFD) | FD_CLOEXEC);
+}
+
+/* Fork and exec exe with args; the child's stdout (and stderr, if err_fd is
+ * not NULL) go to fresh pipes. stdin is /dev/null. */
+static pid_t spawn(const char *exe, const char *const *args, int *out_fd,
+                   int *err_fd)
+{
+    int po[2], pe[2] = {-1, -1};
+    char *argv[64];
+    int n = 0;
+
+    argv[n++] = (char *)exe;
+    for (; args && args[n - 1] && n < 63; n++)
+        argv[n] = (char *)args[n - 1];
+    argv[n] = NULL;
+
+    if (pipe(po) != 0)
+        return -1;
+    if (err_fd && pipe(pe) != 0) {
+        close(po[0]);
+        close(po[1]);
+        return -1;
+    }
+    fflush(NULL); /* the child must not flush our buffered output again */
+    pid_t pid = fork();
+    if (pid < 0) {
+        close(po[0]);
+        close(po[1]);
+        if (err_fd) {
+            close(pe[0]);
+            close(pe[1]);
+        }
+        return -1;
+    }
+    if (pid == 0) {
+#ifdef __linux__
+        prctl(PR_SET_PDEATHSIG, SIGKILL);
+#endif
+        int devnull = open("/dev/null", O_RDONLY);
+        if (devnull >= 0)
+            dup2(devnull, 0);
+        dup2(po[1], 1);
+        if (err_fd)
+            dup2(pe[1], 2);
+        /* Everything else is closed by exec (FD_CLOEXEC below) or is the
+         * pipes' ends, closed here. */
+        close(po[0]);
+        close(po[1]);
+        if (err_fd) {
+            close(pe[0]);
+            close(pe[1]);
+        }
+        signal(SIGPIPE, SIG_DFL);
+        execv(exe, argv);
+        fprintf(stderr, "emu: exec %s: %s\n", exe, strerror(errno));
+        _exit(127);
+    }
+    child_add(pid);
+    close(po[1]);
+    set_cloexec(po[0]);
+    *out_fd = po[0];
+    if (err_fd) {
+        close(pe[1]);
+        set_cloexec(pe[0]);
+        *err_fd = pe[0];
+    }
+    return pid;
+}
+
+static int status_code(int st)
+{
+    if (WIFEXITED(st))
+        return WEXITSTATUS(st);
+    if (WIFSIGNALED(st))
+        return 128 + WTERMSIG(st);
+    return -1;
+}
+
+/* Reap pid within timeout_ms; -1 (and SIGKILL) if it is still running. */
+static int reap(pid_t pid, int timeout_ms)
+{
+    double deadline = emu_now_ms() + timeout_ms;
+    int st;
+    for (;;) {
+        pid_t r = waitpid(pid, &st, WNOHANG);
+        if (r == pid) {
+            child_remove(pid);
+            return status_code(st);
+        }
+        if (r < 0 && errno != EINTR) {
+            child_remove(pid);
+            return -1;
+        }
+        if (emu_now_ms() >= deadline) {
+            kill(pid, SIGKILL);
+            waitpid(pid, NULL, 0);
+            child_remove(pid);
+            return -1;
+        }
+        emu_sleep_ms(5);
+    }
+}
+
+int emu_start(struct emu *e, const char *exe, const char *const *args)
+{
+    memset(e, 0, sizeof(*e));
+    e->out_fd = -1;
+    e->pid = spawn(exe, args, &e->out_fd, NULL);
+    if (e->pid < 0) {
+        fprintf(stderr, "emu: cannot start %s: %s\n", exe, strerror(errno));
+        return -1;
+    }
+
+    /* Read until the first newline; bytes after it are kept in extra. */
+    double deadline = emu_now_ms() + EMU_READY_MS;
+    size_t n = 0;
+    for (;;) {
+        char *nl = memchr(e->line, '\n', n);
+        if (nl) {
+            size_t rest = n - (size_t)(nl - e->line) - 1;
+            memcpy(e->extra, nl + 1, rest);
+            e->extra_len = rest;
+            *nl = '\0';
+            return 0;
+        }
+        if (n >= sizeof(e->line) - 1) {
+            fprintf(stderr, "emu: ready line too long\n");
+            break;
+        }
+        struct pollfd pfd = {e->out_fd, POLLIN, 0};
+        int left = remaining_ms(deadline);
+        int r = poll(&pfd, 1, left);
+        if (r < 0 && errno == EINTR)
+            continue;
+        if (r <= 0) {
+            fprintf(stderr, "emu: no ready line within %d ms\n",
+                    EMU_READY_MS);
+            break;
+        }
+        ssize_t got = read(e->out_fd, e->line + n, sizeof(e->line) - 1 - n);
+        if (got < 0 && errno == EINTR)
+            continue;
+        if (got <= 0) {
+            fprintf(stderr, "emu: stdout closed before the ready line\n");
+            break;
+        }
+        n += (size_t)got;
+    }
+    e->line[n < sizeof(e->line) ? n : sizeof(e->line) - 1] = '\0';
+    fprintf(stderr, "emu: stdout so far: \"%s\"\n", e->line);
+    kill(e->pid, SIGKILL);
+    fprintf(stderr, "emu: daemon status %d\n", reap(e->pid, 3000));
+    close(e->out_fd);
+    e->out_fd = -1;
+    e->pid = 0;
+    return -1;
+}
+
+/* Read what is left on stdout into extra until EOF or deadline. */
+static void drain_stdout(struct emu *e, double deadline)
+{
+    while (e->out_fd >= 0) {
+        struct pollfd pfd = {e->out_fd, POLLIN, 0};
+        int r = poll(&pfd, 1, remaining_ms(deadline));
+        if (r < 0 && errno == EINTR)
+            continue;
+        if (r <= 0)
+            return;
+        char buf[256];
+        ssize_t got = read(e->out_fd, buf, sizeof(buf));
+        if (got < 0 && errno == EINTR)
+            continue;
+        if (got <= 0)
+            return;
+        size_t room = sizeof(e->extra) - 1 - e->extra_len;
+        size_t take = (size_t)got < room ? (size_t)got : room;
+        memcpy(e->extra + e->extra_len, buf, take);
+        e->extra_len += take;
+    }
+}
+
+int emu_stop_sig(struct emu *e, int sig)
+{
+    if (e->pid <= 0)
+        return -1;
+    kill(e->pid, sig);
+    /* The daemon closes stdout when it exits: drain until then, so that a
+     * daemon blocked on a full pipe cannot miss its deadline. */
+    drain_stdout(e, emu_now_ms() + 3000);
+    int st = reap(e->pid, 3000);
+    if (st == -1)
+        fprintf(stderr, "emu: daemon did not exit within 3 s of signal %d\n",
+                sig);
+    e->extra[e->extra_len] = '\0';
+    if (e->out_fd >= 0)
+        close(e->out_fd);
+    e->out_fd = -1;
+    e->pid = 0;
+    return st;
+}
+
+int emu_stop(struct emu *e)
+{
+    return emu_stop_sig(e, SIGTERM);
+}
+
+const char *emu_field(const struct emu *e, const char *name, char *buf,
+                      size_t cap)
+{
+    size_t nl = strlen(name);
+    const char *p = e->line;
+    while (*p) {
+        const char *end = strchr(p, ' ');
+        size_t tl = end ? (size_t)(end - p) : strlen(p);
+        if (tl > nl && strncmp(p, name, nl) == 0 && p[nl] == '=') {
+            size_t vl = tl - nl - 1;
+            if (vl >= cap)
+                return NULL;
+            memcpy(buf, p + nl + 1, vl);
+            buf[vl] = '\0';
+            return buf;
+        }
+        if (!end)
+            break;
+        p = end + 1;
+    }
+    return NULL;
+}
+
+int emu_run(const char *exe, const char *const *args, int timeout_ms,
+            char *out, size_t outcap, char *err, size_t errcap)
+{
+    int fds[2];
+    char *bufs[2] = {out, err};
+    size_t caps[2] = {outcap, errcap}, lens[2] = {0, 0};
+    pid_t pid = spawn(exe, args, &fds[0], &fds[1]);
+    if (pid < 0)
+        return -1;
+    double deadline = emu_now_ms() + timeout_ms;
+    int open_fds = 2;
+    while (open_fds > 0) {
+        struct pollfd pfd[2];
+        int np = 0, map[2];
+        for (int i = 0; i < 2; i++) {
+            if (fds[i] >= 0) {
+                pfd[np].fd = fds[i];
+                pfd[np].events = POLLIN;
+                pfd[np].revents = 0;
+                map[np++] = i;
+            }
+        }
+        int r = poll(pfd, (nfds_t)np, remaining_ms(deadline));
+        if (r < 0 && errno == EINTR)
+            continue;
+        if (r <= 0)
+            break; /* timeout: reap() below kills it */
+        for (int k = 0; k < np; k++) {
+            if (!pfd[k].revents)
+                continue;
+            int i = map[k];
+            char tmp[512];
+            ssize_t got = read(fds[i], tmp, sizeof(tmp));
+            if (got < 0 && errno == EINTR)
+                continue;
+            if (got <= 0) {
+                close(fds[i]);
+                fds[i] = -1;
+                open_fds--;
+                continue;
+            }
+            size_t room = caps[i] > lens[i] + 1 ? caps[i] - lens[i] - 1 : 0;
+            size_t take = (size_t)got < room ? (size_t)got : room;
+            memcpy(bufs[i] + lens[i], tmp, take);
+            lens[i] += take;
+        }
+    }
+    for (int i = 0; i < 2; i++) {
+        if (fds[i] >= 0)
+            close(fds[i]);
+        if (caps[i])
+            bufs[i][lens[i]] = '\0';
+    }
+    return reap(pid, remaining_ms(deadline) + 100);
+}
+
+const char *emu_exe(int argc, char **argv)
+{
+    if (argc < 2 || access(argv[1], X_OK) != 0) {
+        printf("SKIP: no daemon executable given (argv[1])\n");
+        exit(77);
+    }
+    /* A write to a connection the daemon has reset must fail with EPIPE,
+     * not kill the test. */
+    signal(SIGPIPE, SIG_IGN);
+    return argv[1];
+}
+
+/* ---- frames ---- */
+
+static void frame_fill(struct emu_frame *f, uint8_t id, const uint8_t *p,
+                       size_t len)
+{
+    f->id = id;
+    f->len = (uint16_t)len;
+    memcpy(f->payload, p, len);
+    f->status = len >= 2 ? wsg_get_u16(p) : 0xFFFFu;
+    f->t_ms = emu_now_ms();
+}
+
+int emu_packet_decode(const uint8_t *buf, size_t n, struct emu_frame *f)
+{
+    if (n < WSG_HEADER_LEN + WSG_CRC_LEN)
+        return -1;
+    if (buf[0] != WSG_PREAMBLE_BYTE || buf[1] != WSG_PREAMBLE_BYTE ||
+        buf[2] != WSG_PREAMBLE_BYTE)
+        return -1;
+    size_t size = wsg_get_u16(buf + 4);
+    if (size > WSG_REPLY_PAYLOAD_MAX ||
+        n != WSG_HEADER_LEN + size + WSG_CRC_LEN)
+        return -1;
+    if (wsg_crc_update(WSG_CRC_INIT, buf, n) != 0)
+        return -1;
+    frame_fill(f, buf[3], buf + WSG_HEADER_LEN, size);
+    return 0;
+}
+
+/* ---- TCP ---- */
+
+/* "host:port", host possibly in brackets (IPv6). */
+static int split_addr(const char *addr, char *host, size_t hcap, char *port,
+                      size_t pcap)
+{
+    const char *colon = strrchr(addr, ':');
+    if (!colon)
+        return -1;
+    const char *h = addr;
+    size_t hl = (size_t)(colon - addr);
+    if (hl >= 2 && h[0] == '[' && h[hl - 1] == ']') {
+        h++;
+        hl -= 2;
+    }
+    if (hl == 0 || hl >= hcap || strlen(colon + 1) >= pcap)
+        return -1;
+    memcpy(host, h, hl);
+    host[hl] = '\0';
+    strcpy(port, colon + 1);
+    return 0;
+}
+
+static int tcp_open(struct emu_client *c, const char *addr)
+{
+    char host[128], port[16];
+    struct addrinfo hints, *res, *ai;
+    if (split_addr(addr, host, sizeof(host), port, sizeof(port)) != 0) {
+        fprintf(stderr, "emu: bad tcp address \"%s\"\n", addr);
+        return -1;
+    }
+    memset(&hints, 0, sizeof(hints));
+    hints.ai_family = AF_UNSPEC;
+    hints.ai_socktype = SOCK_STREAM;
+    hints.ai_flags = AI_NUMERICHOST | AI_NUMERICSERV;
+    if (getaddrinfo(host, port, &hints, &res) != 0) {
+        fprintf(stderr, "emu: cannot resolve \"%s\"\n", addr);
+        return -1;
+    }
+    c->fd = -1;
+    for (ai = res; ai; ai = ai->ai_next) {
+        int fd = socket(ai->ai_family, ai->ai_socktype, ai->ai_protocol);
+        if (fd < 0)
+            continue;
+        if (connect(fd, ai->ai_addr, ai->ai_addrlen) == 0) {
+            int one = 1;
+            /* Like the drivers: each request leaves at once. */
+            setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof(one));
+            set_cloexec(fd);
+            c->fd = fd;
+            break;
+        }
+        close(fd);
+    }
+    freeaddrinfo(res);
+    if (c->fd < 0) {
+        fprintf(stderr, "emu: connect %s: %s\n", addr, strerror(errno));
+        return -1;
+    }
+    return 0;
+}
+
+static int tcp_send(struct emu_client *c, const uint8_t *pkt, size_t len)
+{
+    while (len > 0) {
+        ssize_t n = send(c->fd, pkt, len, MSG_NOSIGNAL);
+        if (n < 0 && errno == EINTR)
+            continue;
+        if (n <= 0)
+            return -1;
+        pkt += n;
+        len -= (size_t)n;
+    }
+    return 0;
+}
+
+static long tcp_recv(struct emu_client *c, uint8_t *buf, size_t cap,
+                     int timeout_ms)
+{
+    double deadline = emu_now_ms() + timeout_ms;
+    for (;;) {
+        struct pollfd pfd = {c->fd, POLLIN, 0};
+        int r = poll(&pfd, 1, remaining_ms(deadline));
+        if (r < 0 && errno == EINTR)
+            continue;
+        if (r < 0)
+            return -2;
+        if (r == 0)
+            return -1;
+        ssize_t n = recv(c->fd, buf, cap, 0);
+        if (n < 0 && errno == EINTR)
+            continue;
+        if (n < 0)
+            return errno == ECONNRESET ? 0 : -2;
+        return (long)n;
+    }
+}
+
+static void tcp_close(struct emu_client *c, int abort)
+{
+    if (abort) {
+        /* Linger 0: the close sends a reset instead of a FIN. */
+        struct linger lg = {1, 0};
+        setsockopt(c->fd, SOL_SOCKET, SO_LINGER, &lg, sizeof(lg));
+    }
+    close(c->fd);
+}
+
+const struct emu_transport emu_tcp = {"tcp", tcp_open, tcp_send, tcp_recv,
+                                      tcp_close};
+
+const struct emu_transport *const emu_transports[] = {&emu_tcp, NULL};
+
+/* ---- clients ---- */
+
+int emu_open(struct emu_client *c, const struct emu *e,
+             const struct emu_transport *tp)
+{
+    char addr[256];
+    memset(c, 0, sizeof(*c));
+    c->fd = -1;
+    c->tp = tp;
+    wsg_parser_init(&c->parser, 1); /* replies always carry a valid CRC */
+    if (!emu_field(e, tp->field, addr, sizeof(addr))) {
+        fprintf(stderr, "emu: no %s= in the ready line \"%s\"\n", tp->field,
+                e->line);
+        return -1;
+    }
+    return tp->open(c, addr);
+}
+
+void emu_close(struct emu_client *c)
+{
+    if (c->fd >= 0)
+        c->tp->close(c, 0);
+    c->fd = -1;
+}
+
+void emu_abort(struct emu_client *c)
+{
+    if (c->fd >= 0)
+        c->tp->close(c, 1);
+    c->fd = -1;
+}
+
+int emu_send_raw(struct emu_client *c, const void *pkt, size_t len)
+{
+    if (c->fd < 0)
+        return -1;
+    return c->tp->send(c, pkt, len);
+}
+
+int emu_send(struct emu_client *c, uint8_t id, const void *payload,
+             size_t len)
+{
+    uint8_t pkt[WSG_HEADER_LEN + 1024 + WSG_CRC_LEN];
+    size_t n = wsg_frame_encode(pkt, sizeof(pkt), id, payload, len);
+    if (n == 0) {
+        fprintf(stderr, "emu: cannot encode %zu bytes for %02Xh\n", len,
+                (unsigned)id);
+        return -1;
+    }
+    return emu_send_raw(c, pkt, n);
+}
+
+long emu_recv_raw(struct emu_client *c, uint8_t *buf, size_t cap,
+                  int timeout_ms)
+{
+    if (c->fd < 0)
+        return -2;
+    return c->tp->recv(c, buf, cap, timeout_ms);
+}
+
+/* Next frame off the wire (not the kept ones). 1, 0 timeout, -1 end. */
+static int next_wire(struct emu_client *c, struct emu_frame *f,
+                     double deadline)
+{
+    for (;;) {
+        while (c->in_off < c->in_len) {
+            enum wsg_parse_event ev;
+            struct wsg_frame fr;
+            c->in_off += wsg_parser_feed(&c->parser, c->in + c->in_off,
+                                         c->in_len - c->in_off, &ev, &fr);
+            if (ev == WSG_PARSE_FRAME) {
+                frame_fill(f, fr.id, fr.payload, fr.len);
+                c->seen[fr.id]++;
+                return 1;
+            }
+            if (ev == WSG_PARSE_BAD_CRC || ev == WSG_PARSE_OVERSIZE) {
+                c->bad++;
+                fprintf(stderr, "emu: received a %s packet, ID %02Xh\n",
+                        ev == WSG_PARSE_BAD_CRC ? "bad-checksum" : "oversize",
+                        (unsigned)fr.id);
+            }
+        }
+        if (c->eof || c->fd < 0)
+            return -1;
+        long n = c->tp->recv(c, c->in, sizeof(c->in), remaining_ms(deadline));
+        if (n == -1)
+            return 0;
+        if (n <= 0) {
+            c->eof = 1;
+            return -1;
+        }
+        c->in_off = 0;
+        c->in_len = (size_t)n;
+    }
+}
+
+static void keep_push(struct emu_client *c, const struct emu_frame *f)
+{
+    if (c->keep_n == EMU_KEEP) {
+        memmove(&c->keep[0], &c->keep[1],
+                (EMU_KEEP - 1) * sizeof(c->keep[0]));
+        c->keep_n--;
+    }
+    c->keep[c->keep_n++] = *f;
+}
+
+static void keep_take(struct emu_client *c, unsigned i, struct emu_frame *f)
+{
+    *f = c->keep[i];
+    memmove(&c->keep[i], &c->keep[i + 1],
+            (c->keep_n - i - 1) * sizeof(c->keep[0]));
+    c->keep_n--;
+}
+
+void emu_drop_kept(struct emu_client *c)
+{
+    c->keep_n = 0;
+}
+
+int emu_recv(struct emu_client *c, struct emu_frame *f, int timeout_ms)
+{
+    if (c->keep_n > 0) {
+        keep_take(c, 0, f);
+        return 1;
+    }
+    return next_wire(c, f, emu_now_ms() + timeout_ms);
+}
+
+int emu_recv_id(struct emu_client *c, uint8_t id, struct emu_frame *f,
+                int timeout_ms)
+{
+    double deadline = emu_now_ms() + timeout_ms;
+    for (unsigned i = 0; i < c->keep_n; i++) {
+        if (c->keep[i].id == id) {
+            keep_take(c, i, f);
+            return 1;
+        }
+    }
+    for (;;) {
+        int r = next_wire(c, f, deadline);
+        if (r != 1 || f->id == id)
+            return r;
+        keep_push(c, f);
+    }
+}
+
+int emu_request(struct emu_client *c, uint8_t id, const void *payload,
+                size_t len, struct emu_frame *f, int timeout_ms)
+{
+    struct emu_frame tmp;
+    if (!f)
+        f = &tmp;
+    if (emu_send(c, id, payload, len) != 0)
+        return -1;
+    if (emu_recv_id(c, id, f, timeout_ms) != 1)
+        return -1;
+    return (int)f->status;
+}
+
+int emu_sync(struct emu_client *c, int timeout_ms)
+{
+    double deadline = emu_now_ms() + timeout_ms;
+    uint8_t tok[6] = {'s', 'y', 'n', 'c', 0, 0};
+    struct emu_frame f;
+    c->sync_token++;
+    wsg_put_u16(tok + 4, c->sync_token);
+    if (emu_send(c, WSG_CMD_LOOP, tok, sizeof(tok)) != 0)
+        return -1;
+    for (;;) {
+        if (emu_recv_id(c, WSG_CMD_LOOP, &f, remaining_ms(deadline)) != 1)
+            return -1;
+        if (f.status == WSG_E_SUCCESS && f.len == 2 + sizeof(tok) &&
+            memcmp(EMU_PARAMS(&f), tok, sizeof(tok)) == 0)
+            return 0;
+    }
+}
+
+/* ---- gripper helpers ---- */
+
+int emu_get_flags(struct emu_client *c, uint32_t *flags)
+{
+    struct emu_frame f;
+    if (emu_request(c, WSG_CMD_GET_SYSTEM_STATE, NULL, 0, &f, EMU_REPLY_MS) !=
+            WSG_E_SUCCESS ||
+        f.len != 6)
+        return -1;
+    *flags = wsg_get_u32(EMU_PARAMS(&f));
+    return 0;
+}
+
+int emu_get_float(struct emu_client *c, uint8_t id, float *v)
+{
+    struct emu_frame f;
+    if (emu_request(c, id, NULL, 0, &f, EMU_REPLY_MS) != WSG_E_SUCCESS ||
+        f.len != 6)
+        return -1;
+    *v = wsg_get_f32(EMU_PARAMS(&f));
+    return 0;
+}
+
+int emu_wait_flags(struct emu_client *c, uint32_t mask, uint32_t want,
+                   int timeout_ms, uint32_t *flags)
+{
+    double deadline = emu_now_ms() + timeout_ms;
+    uint32_t fl = 0;
+    int r = -1;
+    for (;;) {
+        if (emu_get_flags(c, &fl) == 0 && (fl & mask) == want) {
+            r = 0;
+            break;
+        }
+        if (emu_now_ms() >= deadline)
+            break;
+        emu_sleep_ms(10);
+    }
+    if (flags)
+        *flags = fl;
+    return r;
+}
+
+int emu_motion(struct emu_client *c, uint8_t id, const void *payload,
+               size_t len, int timeout_ms, int *immediate)
+{
+    struct emu_frame f;
+    int st = emu_request(c, id, payload, len, &f, EMU_REPLY_MS);
+    if (immediate)
+        *immediate = st;
+    if (st != WSG_E_CMD_PENDING)
+        return st;
+    if (emu_recv_id(c, id, &f, timeout_ms) != 1)
+        return -1;
+    return (int)f.status;
+}
+
+size_t emu_move_payload(uint8_t *out, uint8_t flags, float width,
+                        float speed)
+{
+    out[0] = flags;
+    wsg_put_f32(out + 1, width);
+    wsg_put_f32(out + 5, speed);
+    return 9;
+}
+
+size_t emu_grasp_payload(uint8_t *out, float width, float speed)
+{
+    wsg_put_f32(out, width);
+    wsg_put_f32(out + 4, speed);
+    return 8;
+}

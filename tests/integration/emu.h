@@ -1,0 +1,182 @@
+/*
+ * Client library of the integration tests: starts the real wsgemu daemon as
+ * a child process, reads its ready line, and talks to it over one of its
+ * interfaces the way a driver would.
+ *
+ * A transport (struct emu_transport) is a small set of operations: open the
+ * address named by a field of the ready line, send one packet, receive bytes
+ * with a timeout, close. Everything above it (framing with the core's
+ * wsg_parser, waiting for a given ID, request/reply) is shared, so the same
+ * tests can run over every interface the daemon offers. Only TCP exists now.
+ *
+ * Every wait takes a timeout: a daemon that never answers fails the test
+ * instead of hanging it.
+ */
+#ifndef WSG_TEST_EMU_H
+#define WSG_TEST_EMU_H
+
+#include <stddef.h>
+#include <stdint.h>
+#include <sys/types.h>
+
+#include "wsg/proto.h"
+
+/* How long an immediate reply may take. NOTES: clients expect a reply
+ * within 250 ms; this is generous for a loaded 2-core machine, because a
+ * slow reply is not what these waits are for: they only stop a hang. */
+#define EMU_REPLY_MS 2000
+/* The daemon prints its ready line within this time. */
+#define EMU_READY_MS 5000
+/* A quiet window: how long "nothing arrives" is watched for. */
+#define EMU_QUIET_MS 300
+
+/* ---- the daemon process ---- */
+
+struct emu {
+    pid_t pid;
+    int out_fd;      /* read end of the daemon's stdout */
+    char line[1024]; /* the ready line, without its newline */
+    /* stdout after the ready line: what arrived with it, and at stop */
+    char extra[1024];
+    size_t extra_len;
+};
+
+/* Start exe with args (NULL-terminated, without argv[0]), stdout piped,
+ * stderr shared with the test (so ctest shows the daemon's messages), and
+ * wait up to EMU_READY_MS for the ready line. Returns 0, or -1 with a
+ * message on stderr (the child is then reaped). */
+int emu_start(struct emu *e, const char *exe, const char *const *args);
+/* Send sig, wait up to 3 s for the exit and collect the rest of stdout into
+ * e->extra. Returns the exit status, 128+N if killed by signal N, or -1 if
+ * it did not exit in time (it is then killed). */
+int emu_stop_sig(struct emu *e, int sig);
+int emu_stop(struct emu *e); /* SIGTERM */
+/* Value of field name=... of the ready line into buf; NULL if absent. */
+const char *emu_field(const struct emu *e, const char *name, char *buf,
+                      size_t cap);
+
+/* Run exe to its end (for option errors): stdout and stderr are captured
+ * (NUL-terminated, truncated to their buffers). Returns the exit status as
+ * emu_stop does, -1 if it ran longer than timeout_ms (it is then killed). */
+int emu_run(const char *exe, const char *const *args, int timeout_ms,
+            char *out, size_t outcap, char *err, size_t errcap);
+
+/* ---- frames ---- */
+
+struct emu_frame {
+    uint8_t id;
+    uint16_t len; /* payload length */
+    /* A reply's status (payload bytes 0..1); 0xFFFF if len < 2. */
+    unsigned status;
+    double t_ms; /* emu_now_ms() when it was taken off the wire */
+    uint8_t payload[WSG_REPLY_PAYLOAD_MAX];
+};
+/* The parameters after the status. */
+#define EMU_PARAMS(f) ((f)->payload + 2)
+#define EMU_NPARAMS(f) ((f)->len >= 2 ? (f)->len - 2 : 0)
+
+/* Check that buf holds exactly one packet with a valid preamble, SIZE and
+ * checksum (the CRC over all of it is 0) and decode it. Used for raw reads,
+ * where the test wants the packet boundaries on the wire. Returns 0 or -1. */
+int emu_packet_decode(const uint8_t *buf, size_t n, struct emu_frame *f);
+
+/* ---- clients ---- */
+
+struct emu_client;
+
+struct emu_transport {
+    const char *field; /* ready-line field with the address: "tcp" */
+    int (*open)(struct emu_client *c, const char *addr);
+    /* One packet, in one piece. 0 or -1. */
+    int (*send)(struct emu_client *c, const uint8_t *pkt, size_t len);
+    /* Wait up to timeout_ms for input and read what is there (one read).
+     * Returns the byte count, 0 at the end of the stream, -1 on timeout,
+     * -2 on an error. */
+    long (*recv)(struct emu_client *c, uint8_t *buf, size_t cap,
+                 int timeout_ms);
+    /* abort: go away without an orderly shutdown (TCP: reset). */
+    void (*close)(struct emu_client *c, int abort);
+};
+
+extern const struct emu_transport emu_tcp;
+/* Every transport this library knows, NULL-terminated. */
+extern const struct emu_transport *const emu_transports[];
+
+/* Frames skipped by emu_recv_id are kept (the newest EMU_KEEP) so that a
+ * reply that overtakes another one is not lost. */
+#define EMU_KEEP 64
+
+struct emu_client {
+    const struct emu_transport *tp;
+    int fd;
+    int eof;
+    struct wsg_parser parser;
+    uint8_t in[4096];
+    size_t in_off, in_len;
+    unsigned seen[256]; /* good frames parsed, per ID, since open */
+    unsigned bad;       /* frames with a bad checksum or oversize */
+    struct emu_frame keep[EMU_KEEP];
+    unsigned keep_first, keep_n;
+    uint16_t sync_token;
+};
+
+/* Connect over tp to the address the ready line gives. -1 (and a message)
+ * if the field is absent or the connection fails. */
+int emu_open(struct emu_client *c, const struct emu *e,
+             const struct emu_transport *tp);
+void emu_close(struct emu_client *c);
+void emu_abort(struct emu_client *c);
+
+int emu_send(struct emu_client *c, uint8_t id, const void *payload,
+             size_t len);
+int emu_send_raw(struct emu_client *c, const void *pkt, size_t len);
+/* One read straight from the transport, bypassing the frame buffer (which
+ * must be empty: use it on a connection that has only seen raw reads). */
+long emu_recv_raw(struct emu_client *c, uint8_t *buf, size_t cap,
+                  int timeout_ms);
+
+/* Next frame in arrival order (kept ones first). 1: got one, 0: timeout,
+ * -1: end of stream or error. */
+int emu_recv(struct emu_client *c, struct emu_frame *f, int timeout_ms);
+/* Next frame with this ID; the others are kept. Same returns. */
+int emu_recv_id(struct emu_client *c, uint8_t id, struct emu_frame *f,
+                int timeout_ms);
+/* Forget the kept frames. */
+void emu_drop_kept(struct emu_client *c);
+/* Send and wait for the first frame with the same ID. Returns its status,
+ * -1 on timeout or end of stream. f may be NULL. */
+int emu_request(struct emu_client *c, uint8_t id, const void *payload,
+                size_t len, struct emu_frame *f, int timeout_ms);
+/* Barrier: send a Loop (06h) with a fresh token and wait for its echo.
+ * Every packet the daemon queued for this connection before it read the
+ * Loop has then been parsed (and counted in seen[]). 0 or -1. */
+int emu_sync(struct emu_client *c, int timeout_ms);
+
+/* ---- gripper helpers (requests with an empty payload) ---- */
+
+/* System state flags (40h); -1 on any failure, else 0. */
+int emu_get_flags(struct emu_client *c, uint32_t *flags);
+/* A float reading (43h, 44h, 45h, 31h, 33h); 0 or -1. */
+int emu_get_float(struct emu_client *c, uint8_t id, float *v);
+/* Poll 40h until (flags & mask) == want. 0, or -1 on timeout; flags (if
+ * not NULL) gets the last value read. */
+int emu_wait_flags(struct emu_client *c, uint32_t mask, uint32_t want,
+                   int timeout_ms, uint32_t *flags);
+/* A motion command: the immediate reply into *immediate; when it is
+ * E_CMD_PENDING, wait up to timeout_ms for the final result and return
+ * it, else return the immediate status. -1 on timeout. */
+int emu_motion(struct emu_client *c, uint8_t id, const void *payload,
+               size_t len, int timeout_ms, int *immediate);
+/* Payload of Preposition (21h) / Grasp (25h) / Release (26h). */
+size_t emu_move_payload(uint8_t *out, uint8_t flags, float width,
+                        float speed);
+size_t emu_grasp_payload(uint8_t *out, float width, float speed);
+
+/* Monotonic milliseconds. */
+double emu_now_ms(void);
+void emu_sleep_ms(int ms);
+
+/* Path of the daemon from argv[1]; test_skip-style exit 77 without it. */
+const char *emu_exe(int argc, char **argv);
+
+#endif

@@ -1,0 +1,292 @@
+/*
+ * integ_disconnect: what a TCP connection's end does to the gripper.
+ *
+ * - a connection that closes without Disconnect Announcement (07h) puts the
+ *   gripper into FAST STOP (40h bit 12), seen by every other client: a
+ *   running motion stops, motion commands answer E_ACCESS_DENIED, a wrong
+ *   key is E_CMD_FORMAT_ERROR, 24h "ack" clears it and motion works again;
+ *   this holds for a close while moving (FIN), for a reset, and for a
+ *   connection that never sent a byte;
+ * - 07h answers E_SUCCESS (with a parameter: E_NO_PARAM_EXPECTED), aborts a
+ *   running motion, every later command on that connection is
+ *   E_ACCESS_DENIED, and its close causes no FAST STOP;
+ * - with --no-disconnect-fast-stop no close causes FAST STOP, while 23h
+ *   still does.
+ *
+ * "No FAST STOP" can only be watched for a while: the window is several
+ * times the delay measured for the positive case on the same daemon.
+ */
+#include "check.h"
+#include "emu.h"
+#include "wsg/axis.h"
+
+#include <string.h>
+
+#define HOMING_MS 4000
+#define MOVE_MS 5000
+
+static const char *const ack = "ack";
+
+static uint32_t flags_of(struct emu_client *c)
+{
+    uint32_t fl = 0;
+    CHECK(emu_get_flags(c, &fl) == 0);
+    return fl;
+}
+
+static float width_of(struct emu_client *c)
+{
+    float w = -1.0f;
+    CHECK(emu_get_float(c, WSG_CMD_GET_WIDTH, &w) == 0);
+    return w;
+}
+
+/* Poll 40h for up to ms: 1 if FAST STOP showed up. */
+static int fast_stop_within(struct emu_client *c, int ms)
+{
+    return emu_wait_flags(c, WSG_SF_FAST_STOP, WSG_SF_FAST_STOP, ms, NULL) ==
+           0;
+}
+
+static void announce_and_close(struct emu_client *c)
+{
+    CHECK_EQ(emu_request(c, WSG_CMD_DISCONNECT, NULL, 0, NULL, EMU_REPLY_MS),
+             WSG_E_SUCCESS);
+    emu_close(c);
+}
+
+/* Start a slow preposition (about 2.5 s) on c and wait until it moves. */
+static void start_slow_move(struct emu_client *c, struct emu_client *mon,
+                            float to)
+{
+    uint8_t p[16];
+    size_t n = emu_move_payload(p, 0, to, 20.0f);
+    REQUIRE(emu_request(c, WSG_CMD_PREPOSITION, p, n, NULL, EMU_REPLY_MS) ==
+            WSG_E_CMD_PENDING);
+    REQUIRE(emu_wait_flags(mon, WSG_SF_MOVING, WSG_SF_MOVING, 1000, NULL) ==
+            0);
+}
+
+/* In FAST STOP: every motion command is refused with E_ACCESS_DENIED and
+ * has no final result. */
+static void check_motion_denied(struct emu_client *m)
+{
+    uint8_t dir = 0, p[16], g[16];
+    size_t n = emu_move_payload(p, 0, 50.0f, 100.0f);
+    size_t gn = emu_grasp_payload(g, 50.0f, 100.0f);
+    unsigned s20 = m->seen[WSG_CMD_HOMING], s21 = m->seen[WSG_CMD_PREPOSITION];
+    CHECK_EQ(emu_request(m, WSG_CMD_HOMING, &dir, 1, NULL, EMU_REPLY_MS),
+             WSG_E_ACCESS_DENIED);
+    CHECK_EQ(emu_request(m, WSG_CMD_PREPOSITION, p, n, NULL, EMU_REPLY_MS),
+             WSG_E_ACCESS_DENIED);
+    CHECK_EQ(emu_request(m, WSG_CMD_GRASP, g, gn, NULL, EMU_REPLY_MS),
+             WSG_E_ACCESS_DENIED);
+    CHECK_EQ(emu_request(m, WSG_CMD_RELEASE, g, gn, NULL, EMU_REPLY_MS),
+             WSG_E_ACCESS_DENIED);
+    CHECK_EQ(flags_of(m) & WSG_SF_MOVING, 0);
+    REQUIRE(emu_sync(m, EMU_REPLY_MS) == 0);
+    CHECK_EQ(m->seen[WSG_CMD_HOMING] - s20, 1);
+    CHECK_EQ(m->seen[WSG_CMD_PREPOSITION] - s21, 1);
+}
+
+/* Acknowledge (wrong key first) and show that motion works again. */
+static void acknowledge(struct emu_client *m)
+{
+    CHECK_EQ(emu_request(m, WSG_CMD_ACK_FAST_STOP, "abc", 3, NULL,
+                         EMU_REPLY_MS),
+             WSG_E_CMD_FORMAT_ERROR);
+    CHECK(flags_of(m) & WSG_SF_FAST_STOP);
+    CHECK_EQ(emu_request(m, WSG_CMD_ACK_FAST_STOP, ack, 3, NULL,
+                         EMU_REPLY_MS),
+             WSG_E_SUCCESS);
+    CHECK(emu_wait_flags(m, WSG_SF_FAST_STOP, 0, 1000, NULL) == 0);
+    uint8_t p[16];
+    size_t n = emu_move_payload(p, 0, 90.0f, 400.0f);
+    int imm = -1;
+    CHECK_EQ(emu_motion(m, WSG_CMD_PREPOSITION, p, n, MOVE_MS, &imm),
+             WSG_E_SUCCESS);
+    CHECK_EQ(imm, WSG_E_CMD_PENDING);
+    CHECK_NEAR(width_of(m), 90.0, 0.1);
+}
+
+/* Returns the longest delay from a close to FAST STOP seen, in ms. */
+static double test_close_without_announce(const struct emu *e,
+                                          struct emu_client *m)
+{
+    struct emu_client a;
+    double t0, worst = 0;
+
+    /* 1. Closed (FIN) while moving: FAST STOP, and the motion stops. */
+    REQUIRE(emu_open(&a, e, &emu_tcp) == 0);
+    start_slow_move(&a, m, 20.0f);
+    unsigned m21 = m->seen[WSG_CMD_PREPOSITION];
+    t0 = emu_now_ms();
+    emu_close(&a);
+    CHECK(fast_stop_within(m, 2000));
+    worst = emu_now_ms() - t0;
+    printf("close while moving: FAST STOP after %.0f ms\n", worst);
+    CHECK(emu_wait_flags(m, WSG_SF_MOVING, 0, 1000, NULL) == 0);
+    float w1 = width_of(m);
+    CHECK(w1 > 20.5f && w1 < 109.5f); /* stopped on the way from 110 */
+    check_motion_denied(m);
+    CHECK_NEAR(width_of(m), w1, 0.01);
+    /* The closed client's result was not sent to anyone else. */
+    CHECK_EQ(m->seen[WSG_CMD_PREPOSITION] - m21, 1);
+    acknowledge(m);
+
+    /* 2. Reset with unread data in flight (a crashed client). */
+    REQUIRE(emu_open(&a, e, &emu_tcp) == 0);
+    CHECK_EQ(emu_request(&a, WSG_CMD_LOOP, "rst", 3, NULL, EMU_REPLY_MS),
+             WSG_E_SUCCESS);
+    REQUIRE(emu_send(&a, WSG_CMD_GET_SYSTEM_STATE, NULL, 0) == 0);
+    t0 = emu_now_ms();
+    emu_abort(&a);
+    CHECK(fast_stop_within(m, 2000));
+    double dt = emu_now_ms() - t0;
+    printf("reset: FAST STOP after %.0f ms\n", dt);
+    worst = dt > worst ? dt : worst;
+    check_motion_denied(m);
+    acknowledge(m);
+
+    /* 3. A connection that never sent anything: also no 07h. */
+    REQUIRE(emu_open(&a, e, &emu_tcp) == 0);
+    t0 = emu_now_ms();
+    emu_close(&a);
+    CHECK(fast_stop_within(m, 2000));
+    dt = emu_now_ms() - t0;
+    printf("silent connection: FAST STOP after %.0f ms\n", dt);
+    worst = dt > worst ? dt : worst;
+    acknowledge(m);
+
+    /* "ack" with no FAST STOP pending is E_SUCCESS (NOTES). */
+    CHECK_EQ(emu_request(m, WSG_CMD_ACK_FAST_STOP, ack, 3, NULL,
+                         EMU_REPLY_MS),
+             WSG_E_SUCCESS);
+    CHECK_EQ(flags_of(m) & WSG_SF_FAST_STOP, 0);
+    return worst;
+}
+
+static void test_announce(const struct emu *e, struct emu_client *m,
+                          int window)
+{
+    struct emu_client a;
+    struct emu_frame f;
+    uint8_t dir = 0;
+
+    /* 07h takes no parameter (3.1.2). */
+    REQUIRE(emu_open(&a, e, &emu_tcp) == 0);
+    CHECK_EQ(emu_request(&a, WSG_CMD_DISCONNECT, "x", 1, NULL, EMU_REPLY_MS),
+             WSG_E_NO_PARAM_EXPECTED);
+    CHECK_EQ(emu_request(&a, WSG_CMD_DISCONNECT, NULL, 0, &f, EMU_REPLY_MS),
+             WSG_E_SUCCESS);
+    CHECK_EQ(f.len, 2);
+    /* Afterwards everything is refused, the announcement itself too, and
+     * the connection stays open ("the gripper will wait for
+     * disconnection"). */
+    CHECK_EQ(emu_request(&a, WSG_CMD_LOOP, "z", 1, &f, EMU_REPLY_MS),
+             WSG_E_ACCESS_DENIED);
+    CHECK_EQ(f.len, 2);
+    CHECK_EQ(emu_request(&a, WSG_CMD_GET_SYSTEM_STATE, NULL, 0, &f,
+                         EMU_REPLY_MS),
+             WSG_E_ACCESS_DENIED);
+    CHECK_EQ(f.len, 2);
+    CHECK_EQ(emu_request(&a, WSG_CMD_HOMING, &dir, 1, NULL, EMU_REPLY_MS),
+             WSG_E_ACCESS_DENIED);
+    CHECK_EQ(emu_request(&a, WSG_CMD_FAST_STOP, NULL, 0, NULL, EMU_REPLY_MS),
+             WSG_E_ACCESS_DENIED);
+    CHECK_EQ(emu_request(&a, WSG_CMD_DISCONNECT, NULL, 0, NULL, EMU_REPLY_MS),
+             WSG_E_ACCESS_DENIED);
+    /* Its 23h was refused: no FAST STOP from that either. */
+    CHECK_EQ(flags_of(m) & WSG_SF_FAST_STOP, 0);
+    emu_close(&a);
+    CHECK(!fast_stop_within(m, window));
+
+    /* 07h aborts a running motion at once, without FAST STOP. */
+    REQUIRE(emu_open(&a, e, &emu_tcp) == 0);
+    start_slow_move(&a, m, 40.0f);
+    double t0 = emu_now_ms();
+    CHECK_EQ(emu_request(&a, WSG_CMD_DISCONNECT, NULL, 0, NULL, EMU_REPLY_MS),
+             WSG_E_SUCCESS);
+    /* The move would take over 2 s; stopping takes one step. */
+    CHECK(emu_wait_flags(m, WSG_SF_MOVING, 0, 1000, NULL) == 0);
+    printf("07h while moving: stopped after %.0f ms\n", emu_now_ms() - t0);
+    float w = width_of(m);
+    CHECK(w > 40.5f && w < 89.5f);
+    emu_close(&a);
+    CHECK(!fast_stop_within(m, window));
+
+    /* Motion is allowed as ever. */
+    uint8_t p[16];
+    size_t n = emu_move_payload(p, 0, 90.0f, 400.0f);
+    CHECK_EQ(emu_motion(m, WSG_CMD_PREPOSITION, p, n, MOVE_MS, NULL),
+             WSG_E_SUCCESS);
+}
+
+static void test_no_disconnect_fast_stop(const char *exe, int window)
+{
+    static const char *const args[] = {"--tcp", "127.0.0.1:0",
+                                       "--no-disconnect-fast-stop", NULL};
+    struct emu e;
+    struct emu_client m, a;
+
+    REQUIRE(emu_start(&e, exe, args) == 0);
+    REQUIRE(emu_open(&m, &e, &emu_tcp) == 0);
+
+    REQUIRE(emu_open(&a, &e, &emu_tcp) == 0);
+    CHECK_EQ(emu_request(&a, WSG_CMD_LOOP, "fin", 3, NULL, EMU_REPLY_MS),
+             WSG_E_SUCCESS);
+    emu_close(&a);
+    REQUIRE(emu_open(&a, &e, &emu_tcp) == 0);
+    CHECK_EQ(emu_request(&a, WSG_CMD_LOOP, "rst", 3, NULL, EMU_REPLY_MS),
+             WSG_E_SUCCESS);
+    emu_abort(&a);
+    REQUIRE(emu_open(&a, &e, &emu_tcp) == 0);
+    emu_close(&a);
+    CHECK(!fast_stop_within(&m, window));
+
+    /* FAST STOP itself still works in this mode (so the watch above could
+     * have seen one): 23h sets it, motion is refused, "ack" clears it. */
+    CHECK_EQ(emu_request(&m, WSG_CMD_FAST_STOP, NULL, 0, NULL, EMU_REPLY_MS),
+             WSG_E_SUCCESS);
+    CHECK(fast_stop_within(&m, 1000));
+    uint8_t dir = 0;
+    CHECK_EQ(emu_request(&m, WSG_CMD_HOMING, &dir, 1, NULL, EMU_REPLY_MS),
+             WSG_E_ACCESS_DENIED);
+    CHECK_EQ(emu_request(&m, WSG_CMD_ACK_FAST_STOP, ack, 3, NULL,
+                         EMU_REPLY_MS),
+             WSG_E_SUCCESS);
+    CHECK(emu_wait_flags(&m, WSG_SF_FAST_STOP, 0, 1000, NULL) == 0);
+    CHECK_EQ(m.bad, 0);
+    emu_close(&m); /* no 07h: harmless in this mode */
+    CHECK_EQ(emu_stop(&e), 0);
+}
+
+int main(int argc, char **argv)
+{
+    static const char *const args[] = {"--tcp", "127.0.0.1:0", NULL};
+    const char *exe = emu_exe(argc, argv);
+    struct emu e;
+    struct emu_client m;
+
+    REQUIRE(emu_start(&e, exe, args) == 0);
+    REQUIRE(emu_open(&m, &e, &emu_tcp) == 0);
+    uint8_t dir = 0;
+    REQUIRE(emu_motion(&m, WSG_CMD_HOMING, &dir, 1, HOMING_MS, NULL) ==
+            WSG_E_SUCCESS);
+
+    double worst = test_close_without_announce(&e, &m);
+    /* Watch for "no FAST STOP" several times as long as one took to show,
+     * and never less than the quiet window. */
+    int window = (int)(worst * 5);
+    if (window < EMU_QUIET_MS * 2)
+        window = EMU_QUIET_MS * 2;
+    if (window > 3000)
+        window = 3000;
+    test_announce(&e, &m, window);
+    CHECK_EQ(m.bad, 0);
+    announce_and_close(&m);
+    CHECK_EQ(emu_stop(&e), 0);
+
+    test_no_disconnect_fast_stop(exe, window);
+    TEST_EXIT();
+}

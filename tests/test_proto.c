@@ -1,0 +1,255 @@
+/*
+ * The protocol layer: the CRC of Appendix C against the manual's example
+ * packets, frame encoding, and the incremental parser under every split of
+ * its input, garbage, bad checksums and oversized SIZE fields.
+ */
+#include <string.h>
+
+#include "check.h"
+#include "wsg/proto.h"
+
+/* All seven example packets of chapter 1, byte for byte. The Get
+ * Acceleration example lost one 00h in the manual's text (SIZE says 6, five
+ * bytes are printed); its checksum DCCBh is right for the packet with it. */
+static const uint8_t ex1[] = {0xAA, 0xAA, 0xAA, 0x01, 0x00, 0x00, 0xE8, 0x10};
+static const uint8_t ex2[] = {0xAA, 0xAA, 0xAA, 0x01, 0x02,
+                              0x00, 0x12, 0x34, 0x6D, 0x66};
+static const uint8_t ex_homing[] = {0xAA, 0xAA, 0xAA, 0x20, 0x02,
+                                    0x00, 0x00, 0x00, 0xB3, 0xFD};
+static const uint8_t ex_unknown[] = {0xAA, 0xAA, 0xAA, 0x90, 0x02,
+                                     0x00, 0x0E, 0x00, 0xFD, 0x02};
+static const uint8_t ex_getacc[] = {0xAA, 0xAA, 0xAA, 0x30, 0x06, 0x00, 0x00,
+                                    0x00, 0x00, 0x00, 0x16, 0x43, 0xDC, 0xCB};
+static const uint8_t ex_pending[] = {0xAA, 0xAA, 0xAA, 0x21, 0x02,
+                                     0x00, 0x1A, 0x00, 0x67, 0xCB};
+static const uint8_t ex_final[] = {0xAA, 0xAA, 0xAA, 0x21, 0x02,
+                                   0x00, 0x00, 0x00, 0x28, 0x04};
+
+static void test_crc_examples(void)
+{
+    const struct {
+        const uint8_t *p;
+        size_t n;
+    } ex[] = {{ex1, sizeof ex1},
+              {ex2, sizeof ex2},
+              {ex_homing, sizeof ex_homing},
+              {ex_unknown, sizeof ex_unknown},
+              {ex_getacc, sizeof ex_getacc},
+              {ex_pending, sizeof ex_pending},
+              {ex_final, sizeof ex_final}};
+    size_t i;
+
+    for (i = 0; i < sizeof ex / sizeof ex[0]; i++) {
+        uint16_t crc = wsg_crc_update(WSG_CRC_INIT, ex[i].p, ex[i].n - 2);
+        CHECK_EQ(crc, wsg_get_u16(ex[i].p + ex[i].n - 2));
+        /* Over the whole packet including its checksum: 0 (ch. 1.1). */
+        CHECK_EQ(wsg_crc_update(WSG_CRC_INIT, ex[i].p, ex[i].n), 0);
+    }
+    CHECK_EQ(wsg_crc_update(WSG_CRC_INIT, ex2, 8), 0x666D);
+}
+
+/* The table against the bitwise definition of the polynomial. */
+static void test_crc_table(void)
+{
+    unsigned i, b;
+
+    for (i = 0; i < 256; i++) {
+        uint8_t byte = (uint8_t)i;
+        uint16_t t = (uint16_t)(i << 8);
+        for (b = 0; b < 8; b++)
+            t = (uint16_t)((t & 0x8000u) ? ((unsigned)t << 1) ^ 0x1021u
+                                         : (unsigned)t << 1);
+        /* crc 0: T[byte] is all that remains of the update */
+        CHECK_EQ(wsg_crc_update(0, &byte, 1), t);
+    }
+}
+
+static void test_encode(void)
+{
+    uint8_t out[64], payload[2] = {0x12, 0x34};
+    uint8_t acc[4];
+
+    CHECK_EQ(wsg_frame_encode(out, sizeof out, 0x01, NULL, 0), sizeof ex1);
+    CHECK(memcmp(out, ex1, sizeof ex1) == 0);
+    CHECK_EQ(wsg_frame_encode(out, sizeof out, 0x01, payload, 2), sizeof ex2);
+    CHECK(memcmp(out, ex2, sizeof ex2) == 0);
+    CHECK_EQ(wsg_frame_encode_reply(out, sizeof out, 0x20, 0, NULL, 0),
+             sizeof ex_homing);
+    CHECK(memcmp(out, ex_homing, sizeof ex_homing) == 0);
+    wsg_put_f32(acc, 150.0f);
+    CHECK_EQ(wsg_frame_encode_reply(out, sizeof out, 0x30, 0, acc, 4),
+             sizeof ex_getacc);
+    CHECK(memcmp(out, ex_getacc, sizeof ex_getacc) == 0);
+    /* Too small a buffer: nothing written, 0 returned. */
+    CHECK_EQ(wsg_frame_encode(out, 9, 0x01, payload, 2), 0);
+    CHECK_EQ(wsg_get_f32(acc), 150.0f);
+}
+
+/* Everything the parser reports for an input fed in chunks of `chunk`. */
+struct events {
+    int n;
+    enum wsg_parse_event ev[16];
+    uint8_t id[16];
+    uint16_t len[16];
+    uint8_t payload[16][WSG_PAYLOAD_MAX];
+};
+
+static void feed_chunked(struct wsg_parser *p, const uint8_t *in, size_t len,
+                         size_t chunk, struct events *e)
+{
+    size_t off = 0;
+
+    memset(e, 0, sizeof *e);
+    while (off < len) {
+        size_t n = len - off < chunk ? len - off : chunk;
+        const uint8_t *c = in + off;
+        off += n;
+        while (n) {
+            enum wsg_parse_event ev;
+            struct wsg_frame f;
+            size_t used = wsg_parser_feed(p, c, n, &ev, &f);
+            REQUIRE(used > 0 && used <= n);
+            c += used;
+            n -= used;
+            if (ev == WSG_PARSE_NONE) {
+                CHECK_EQ(n, 0);
+                continue;
+            }
+            REQUIRE(e->n < 16);
+            e->ev[e->n] = ev;
+            e->id[e->n] = f.id;
+            e->len[e->n] = f.len;
+            memcpy(e->payload[e->n], f.payload, f.len);
+            e->n++;
+        }
+    }
+}
+
+static void test_parser_splits(void)
+{
+    uint8_t stream[256];
+    size_t len = 0, chunk;
+    struct events ref, e;
+    struct wsg_parser p;
+    int i;
+
+    /* garbage, two frames back to back, garbage ending in AAh, a frame */
+    memcpy(stream + len, "\x01\x02\xAA\x55", 4);
+    len += 4;
+    memcpy(stream + len, ex2, sizeof ex2);
+    len += sizeof ex2;
+    memcpy(stream + len, ex1, sizeof ex1);
+    len += sizeof ex1;
+    memcpy(stream + len, "\xAA\xAA\x00\xAA", 4);
+    len += 4;
+    memcpy(stream + len, ex_getacc, sizeof ex_getacc);
+    len += sizeof ex_getacc;
+
+    wsg_parser_init(&p, 1);
+    feed_chunked(&p, stream, len, len, &ref);
+    REQUIRE(ref.n == 3);
+    for (i = 0; i < 3; i++)
+        CHECK_EQ(ref.ev[i], WSG_PARSE_FRAME);
+    CHECK_EQ(ref.id[0], 0x01);
+    CHECK_EQ(ref.len[0], 2);
+    CHECK(memcmp(ref.payload[0], "\x12\x34", 2) == 0);
+    CHECK_EQ(ref.id[1], 0x01);
+    CHECK_EQ(ref.len[1], 0);
+    CHECK_EQ(ref.id[2], 0x30);
+    CHECK_EQ(ref.len[2], 6);
+
+    /* Any split of the input gives the same frames. */
+    for (chunk = 1; chunk < len; chunk++) {
+        wsg_parser_init(&p, 1);
+        feed_chunked(&p, stream, len, chunk, &e);
+        CHECK_EQ(e.n, ref.n);
+        CHECK(memcmp(&e, &ref, sizeof e) == 0);
+    }
+}
+
+static void test_parser_bad_crc(void)
+{
+    uint8_t stream[64];
+    struct events e;
+    struct wsg_parser p;
+
+    memcpy(stream, ex2, sizeof ex2);
+    stream[sizeof ex2 - 1] ^= 0xFF; /* break the checksum */
+    memcpy(stream + sizeof ex2, ex1, sizeof ex1);
+
+    wsg_parser_init(&p, 1);
+    feed_chunked(&p, stream, sizeof ex2 + sizeof ex1, 3, &e);
+    REQUIRE(e.n == 2);
+    CHECK_EQ(e.ev[0], WSG_PARSE_BAD_CRC);
+    CHECK_EQ(e.id[0], 0x01);            /* answered under the received ID */
+    CHECK_EQ(e.ev[1], WSG_PARSE_FRAME); /* and back in step */
+
+    /* Checksum evaluation off: the same bytes are a frame. */
+    wsg_parser_init(&p, 0);
+    feed_chunked(&p, stream, sizeof ex2, 1, &e);
+    REQUIRE(e.n == 1);
+    CHECK_EQ(e.ev[0], WSG_PARSE_FRAME);
+}
+
+static void test_parser_oversize(void)
+{
+    /* SIZE FFFFh: refused at once, without waiting for 65535 bytes */
+    uint8_t stream[64] = {0xAA, 0xAA, 0xAA, 0x06, 0xFF, 0xFF, 0x00, 0x00};
+    size_t len = 8;
+    struct events e;
+    struct wsg_parser p;
+    uint8_t big[3 + 3] = {0xAA,
+                          0xAA,
+                          0xAA,
+                          0x06,
+                          (WSG_PAYLOAD_MAX + 1) & 0xFF,
+                          (WSG_PAYLOAD_MAX + 1) >> 8};
+
+    memcpy(stream + len, ex1, sizeof ex1);
+    len += sizeof ex1;
+    wsg_parser_init(&p, 1);
+    feed_chunked(&p, stream, len, 1, &e);
+    REQUIRE(e.n == 2);
+    CHECK_EQ(e.ev[0], WSG_PARSE_OVERSIZE);
+    CHECK_EQ(e.id[0], 0x06);
+    CHECK_EQ(e.ev[1], WSG_PARSE_FRAME);
+    CHECK_EQ(e.id[1], 0x01);
+
+    /* One above the maximum is refused; the maximum itself is accepted. */
+    wsg_parser_init(&p, 1);
+    feed_chunked(&p, big, sizeof big, 1, &e);
+    REQUIRE(e.n == 1);
+    CHECK_EQ(e.ev[0], WSG_PARSE_OVERSIZE);
+    {
+        uint8_t loop[WSG_PAYLOAD_MAX], frame[WSG_PAYLOAD_MAX + 8];
+        size_t n;
+        memset(loop, 0x5A, sizeof loop);
+        n = wsg_frame_encode(frame, sizeof frame, 0x06, loop, sizeof loop);
+        REQUIRE(n == sizeof frame);
+        wsg_parser_init(&p, 1);
+        feed_chunked(&p, frame, n, 7, &e);
+        REQUIRE(e.n == 1);
+        CHECK_EQ(e.ev[0], WSG_PARSE_FRAME);
+        CHECK_EQ(e.len[0], WSG_PAYLOAD_MAX);
+    }
+}
+
+static void test_status_names(void)
+{
+    CHECK(strcmp(wsg_status_name(WSG_E_SUCCESS), "E_SUCCESS") == 0);
+    CHECK(strcmp(wsg_status_name(WSG_E_CMD_PENDING), "E_CMD_PENDING") == 0);
+    CHECK(strcmp(wsg_status_name(WSG_E_FILE_EXISTS), "E_FILE_EXISTS") == 0);
+    CHECK(strcmp(wsg_status_name(31), "E_UNKNOWN") == 0);
+}
+
+int main(void)
+{
+    test_crc_examples();
+    test_crc_table();
+    test_encode();
+    test_parser_splits();
+    test_parser_bad_crc();
+    test_parser_oversize();
+    test_status_names();
+    TEST_EXIT();
+}
