@@ -1,0 +1,354 @@
+/*
+ * The gripper model driven by a fake clock: motion durations against the
+ * trapezoid computed here independently, homing, grasping a part (held, no
+ * part, part lost, force build-up), clamp and stop on block, soft limits,
+ * FAST STOP, overdrive, and the system state flags at every stage.
+ */
+#include <errno.h>
+
+#include "tdev.h"
+
+/* Duration of a rest-to-rest move of d mm at vmax and acc. */
+static double trapezoid_s(double d, double vmax, double acc)
+{
+    if (d * acc >= vmax * vmax)
+        return d / vmax + vmax / acc;
+    return 2.0 * sqrt(d / acc);
+}
+
+/* Steps from the command to its final result, minus the step that starts
+ * the motion, in seconds. */
+static double timed_move(struct tdev *t, float width, float speed)
+{
+    long k;
+
+    REQUIRE(tdev_move(t, 0, width, speed) == WSG_E_CMD_PENDING);
+    k = tdev_run_until(t, 0, WSG_CMD_PREPOSITION, 100000);
+    REQUIRE(k > 0);
+    CHECK_EQ(tdev_last(t)->status, WSG_E_SUCCESS);
+    return (double)k * t->dev.axis.cfg.step_us * 1e-6;
+}
+
+static void test_durations(void)
+{
+    struct tdev t;
+    double dt;
+
+    tdev_init(&t);
+    CHECK_EQ(tdev_home(&t, 0), WSG_E_SUCCESS);
+    dt = t.dev.axis.cfg.step_us * 1e-6;
+    /* 110 -> 10 at 100 mm/s, 150 mm/s^2: reaches vmax */
+    CHECK_NEAR(timed_move(&t, 10.0f, 100.0f), trapezoid_s(100.0, 100.0, 150.0),
+               dt);
+    /* 10 -> 15 at 400 mm/s: triangular */
+    CHECK_NEAR(timed_move(&t, 15.0f, 400.0f), trapezoid_s(5.0, 400.0, 150.0),
+               dt);
+    /* with a higher acceleration */
+    CHECK_EQ(tdev_cmd1f(&t, WSG_CMD_SET_ACCELERATION, 2000.0f), WSG_E_SUCCESS);
+    CHECK_NEAR(timed_move(&t, 95.0f, 300.0f), trapezoid_s(80.0, 300.0, 2000.0),
+               dt);
+    /* speed below the minimum is clamped to 5 mm/s */
+    CHECK_NEAR(timed_move(&t, 94.0f, 0.0f), trapezoid_s(1.0, 5.0, 2000.0), dt);
+
+    /* the same with a coarser step */
+    {
+        struct wsg_axis_config cfg;
+        REQUIRE(wsg_axis_config_init(&cfg, "wsg50") == 0);
+        cfg.step_us = 5000;
+        tdev_init_cfg(&t, &cfg);
+        CHECK_EQ(tdev_home(&t, 0), WSG_E_SUCCESS);
+        CHECK_NEAR(timed_move(&t, 30.0f, 80.0f),
+                   trapezoid_s(80.0, 80.0, 150.0), 0.005);
+    }
+}
+
+static void test_motion_values(void)
+{
+    struct tdev t;
+    double width_before;
+    int i;
+
+    tdev_init(&t);
+    CHECK_EQ(tdev_home(&t, 0), WSG_E_SUCCESS);
+    CHECK_EQ(tdev_move(&t, 0, 10.0f, 50.0f), WSG_E_CMD_PENDING);
+    tdev_steps(&t, 1);
+    CHECK(tdev_flags(&t) & WSG_SF_MOVING);
+    CHECK_EQ(tdev_grasp_state(&t), WSG_GS_POSITIONING);
+    /* accelerating at 150 mm/s^2 for 0.2 s: speed 30 mm/s, closing */
+    tdev_steps(&t, 199);
+    CHECK_NEAR(tdev_getf(&t, WSG_CMD_GET_SPEED), -30.0, 1e-3);
+    CHECK_NEAR(tdev_getf(&t, WSG_CMD_GET_WIDTH), 110.0 - 0.5 * 150 * 0.04,
+               1e-3);
+    /* cruising: the commanded speed, monotonically closing */
+    tdev_steps(&t, 400);
+    CHECK_NEAR(tdev_getf(&t, WSG_CMD_GET_SPEED), -50.0, 1e-3);
+    for (i = 0; i < 10; i++) {
+        width_before = t.dev.axis.width;
+        tdev_steps(&t, 1);
+        CHECK(t.dev.axis.width < width_before);
+    }
+    CHECK_EQ(tdev_getf(&t, WSG_CMD_GET_FORCE), 0.0f); /* free motion */
+    CHECK_EQ(tdev_final(&t, WSG_CMD_PREPOSITION, 10000), WSG_E_SUCCESS);
+    CHECK_EQ(tdev_getf(&t, WSG_CMD_GET_SPEED), 0.0f);
+    CHECK(!(tdev_flags(&t) & WSG_SF_MOVING));
+    CHECK_EQ(tdev_grasp_state(&t), WSG_GS_IDLE);
+}
+
+static void test_homing_time(void)
+{
+    struct tdev t;
+    long k;
+
+    /* from fully closed to the open end stop, at the slowest acceleration:
+     * well within 4 s */
+    tdev_init(&t);
+    t.dev.axis.width = 0.0;
+    CHECK_EQ(tdev_cmd1f(&t, WSG_CMD_SET_ACCELERATION, 100.0f), WSG_E_SUCCESS);
+    CHECK_EQ(tdev_cmd(&t, WSG_CMD_HOMING, "\x01", 1), WSG_E_CMD_PENDING);
+    tdev_steps(&t, 1);
+    CHECK(tdev_flags(&t) & WSG_SF_MOVING);
+    CHECK(!(tdev_flags(&t) & WSG_SF_REFERENCED));
+    k = tdev_run_until(&t, 0, WSG_CMD_HOMING, 4000);
+    CHECK(k > 0 && k < 4000);
+    CHECK_EQ(tdev_last(&t)->status, WSG_E_SUCCESS);
+    CHECK_EQ(tdev_flags(&t), WSG_SF_REFERENCED);
+    CHECK_NEAR(t.dev.axis.width, 110.0, 1e-9);
+
+    /* every model homes within 4 s from the far end */
+    {
+        const char *models[] = {"wsg50-210", "wsg32", "wsg25"};
+        struct wsg_axis_config cfg;
+        size_t i;
+        for (i = 0; i < 3; i++) {
+            REQUIRE(wsg_axis_config_init(&cfg, models[i]) == 0);
+            tdev_init_cfg(&t, &cfg);
+            t.dev.axis.width = 0.0;
+            CHECK_EQ(tdev_cmd(&t, WSG_CMD_HOMING, "\x00", 1),
+                     WSG_E_CMD_PENDING);
+            k = tdev_run_until(&t, 0, WSG_CMD_HOMING, 4000);
+            CHECK(k > 0);
+            CHECK_NEAR(t.dev.axis.width, cfg.stroke, 1e-9);
+        }
+    }
+    CHECK_EQ(wsg_axis_config_init(&(struct wsg_axis_config){0}, "wsg99"),
+             -EINVAL);
+}
+
+static void test_grasp_hold(void)
+{
+    struct tdev t;
+    double prev = 0;
+    int rising = 1, i;
+
+    tdev_init(&t);
+    CHECK_EQ(tdev_home(&t, 0), WSG_E_SUCCESS);
+    wsg_axis_set_part(&t.dev.axis, 40.0, 10.0); /* soft: 10 N/mm */
+    CHECK_EQ(tdev_cmd2f(&t, WSG_CMD_GRASP, 40.0f, 100.0f), WSG_E_CMD_PENDING);
+    tdev_steps(&t, 1);
+    CHECK_EQ(tdev_grasp_state(&t), WSG_GS_GRASPING);
+    /* run to first contact, then watch the force build up */
+    for (i = 0; i < 3000 && t.dev.axis.width > 40.0; i++)
+        tdev_steps(&t, 1);
+    for (i = 0; i < 3000 && t.dev.axis.motion.kind; i++) {
+        tdev_steps(&t, 1);
+        if (t.dev.axis.force < prev)
+            rising = 0;
+        prev = t.dev.axis.force;
+    }
+    CHECK(rising);
+    CHECK(i > 5); /* took several steps, did not jump */
+    CHECK_EQ(tdev_last(&t)->id, WSG_CMD_GRASP);
+    CHECK_EQ(tdev_last(&t)->status, WSG_E_SUCCESS);
+    CHECK_EQ(tdev_grasp_state(&t), WSG_GS_HOLDING);
+    /* held with the force limit, 4 mm into a 10 N/mm part */
+    CHECK_NEAR(tdev_getf(&t, WSG_CMD_GET_FORCE), 40.0, 1e-3);
+    CHECK_NEAR(tdev_getf(&t, WSG_CMD_GET_WIDTH), 36.0, 1e-3);
+    CHECK_EQ(tdev_flags(&t), WSG_SF_REFERENCED | WSG_SF_BLOCKED_MINUS |
+                                 WSG_SF_TARGET_POS_REACHED);
+    /* holding is not moving: steps change nothing */
+    CHECK(wsg_device_idle(&t.dev));
+    tdev_steps(&t, 100);
+    CHECK_NEAR(t.dev.axis.width, 36.0, 1e-9);
+
+    /* the part is removed: lost, the fingers close through the clamping
+     * travel, statistics count it */
+    wsg_axis_set_part(&t.dev.axis, -1.0, 0);
+    CHECK(!wsg_device_idle(&t.dev));
+    tdev_steps(&t, 1);
+    CHECK_EQ(tdev_grasp_state(&t), WSG_GS_PART_LOST);
+    CHECK(tdev_flags(&t) & WSG_SF_MOVING);
+    CHECK(!(tdev_flags(&t) & WSG_SF_BLOCKED_MINUS));
+    tdev_steps(&t, 2000);
+    CHECK_NEAR(t.dev.axis.width, 30.0, 1e-9); /* 40 - 10 mm travel */
+    CHECK_EQ(t.dev.axis.force, 0.0);
+    CHECK_EQ(tdev_grasp_state(&t), WSG_GS_PART_LOST);
+    CHECK_EQ(tdev_cmd(&t, WSG_CMD_GET_GRASP_STATS, NULL, 0), WSG_E_SUCCESS);
+    CHECK_EQ(wsg_get_u32(tdev_last(&t)->params), 1);
+    CHECK_EQ(wsg_get_u16(tdev_last(&t)->params + 4), 0);
+    CHECK_EQ(wsg_get_u16(tdev_last(&t)->params + 6), 1);
+    /* part lost stays until the next grasp or release */
+    CHECK_EQ(tdev_cmd2f(&t, WSG_CMD_RELEASE, 50.0f, 100.0f),
+             WSG_E_CMD_PENDING);
+    tdev_steps(&t, 1);
+    CHECK_EQ(tdev_grasp_state(&t), WSG_GS_RELEASING);
+    CHECK_EQ(tdev_final(&t, WSG_CMD_RELEASE, 4000), WSG_E_SUCCESS);
+    CHECK_EQ(tdev_grasp_state(&t), WSG_GS_IDLE);
+}
+
+static void test_grasp_no_part(void)
+{
+    struct tdev t;
+
+    tdev_init(&t);
+    CHECK_EQ(tdev_home(&t, 0), WSG_E_SUCCESS);
+    /* nothing there: the fingers fall through the clamping travel */
+    CHECK_EQ(tdev_cmd2f(&t, WSG_CMD_GRASP, 40.0f, 100.0f), WSG_E_CMD_PENDING);
+    CHECK_EQ(tdev_final(&t, WSG_CMD_GRASP, 4000), WSG_E_CMD_FAILED);
+    CHECK_EQ(tdev_grasp_state(&t), WSG_GS_NO_PART);
+    CHECK_NEAR(t.dev.axis.width, 30.0, 1e-9);
+    CHECK(!(tdev_flags(&t) & WSG_SF_TARGET_POS_REACHED));
+
+    /* a part much wider than expected blocks outside the window */
+    CHECK_EQ(tdev_cmd2f(&t, WSG_CMD_RELEASE, 100.0f, 400.0f),
+             WSG_E_CMD_PENDING);
+    CHECK_EQ(tdev_final(&t, WSG_CMD_RELEASE, 4000), WSG_E_SUCCESS);
+    wsg_axis_set_part(&t.dev.axis, 80.0, 0);
+    CHECK_EQ(tdev_cmd2f(&t, WSG_CMD_GRASP, 40.0f, 100.0f), WSG_E_CMD_PENDING);
+    CHECK_EQ(tdev_final(&t, WSG_CMD_GRASP, 4000), WSG_E_CMD_FAILED);
+    CHECK_EQ(tdev_grasp_state(&t), WSG_GS_NO_PART);
+    CHECK(t.dev.axis.width > 79.0);
+
+    /* within the tolerance above the nominal width: held */
+    CHECK_EQ(tdev_cmd2f(&t, WSG_CMD_GRASP, 75.0f, 100.0f), WSG_E_CMD_PENDING);
+    CHECK_EQ(tdev_final(&t, WSG_CMD_GRASP, 4000), WSG_E_SUCCESS);
+    CHECK_EQ(tdev_grasp_state(&t), WSG_GS_HOLDING);
+    CHECK_EQ(tdev_cmd(&t, WSG_CMD_GET_GRASP_STATS, NULL, 0), WSG_E_SUCCESS);
+    CHECK_EQ(wsg_get_u32(tdev_last(&t)->params), 3);
+    CHECK_EQ(wsg_get_u16(tdev_last(&t)->params + 4), 2);
+    /* Stop while holding: idle, the force goes */
+    CHECK_EQ(tdev_cmd(&t, WSG_CMD_STOP, NULL, 0), WSG_E_SUCCESS);
+    tdev_steps(&t, 1);
+    CHECK_EQ(tdev_grasp_state(&t), WSG_GS_IDLE);
+    CHECK_EQ(t.dev.axis.force, 0.0);
+    CHECK(tdev_flags(&t) & WSG_SF_AXIS_STOPPED);
+}
+
+static void test_block(void)
+{
+    struct tdev t;
+
+    tdev_init(&t);
+    CHECK_EQ(tdev_home(&t, 0), WSG_E_SUCCESS);
+    wsg_axis_set_part(&t.dev.axis, 50.0, 0); /* default 50 N/mm */
+    /* clamp on block: E_AXIS_BLOCKED, keeps the force limit */
+    CHECK_EQ(tdev_move(&t, 0, 20.0f, 100.0f), WSG_E_CMD_PENDING);
+    CHECK_EQ(tdev_final(&t, WSG_CMD_PREPOSITION, 4000), WSG_E_AXIS_BLOCKED);
+    CHECK_NEAR(t.dev.axis.width, 50.0 - 40.0 / 50.0, 1e-9);
+    CHECK_NEAR(tdev_getf(&t, WSG_CMD_GET_FORCE), 40.0, 1e-3);
+    CHECK(tdev_flags(&t) & WSG_SF_BLOCKED_MINUS);
+    CHECK(!(tdev_flags(&t) & WSG_SF_MOVING));
+    /* the block goes: the fingers snap to the target, no further reply */
+    wsg_axis_set_part(&t.dev.axis, -1, 0);
+    tdev_clear(&t);
+    tdev_steps(&t, 2000);
+    CHECK_NEAR(t.dev.axis.width, 20.0, 1e-9);
+    CHECK_EQ(t.sess[0].n, 0);
+    CHECK(!(tdev_flags(&t) & WSG_SF_BLOCKED_MINUS));
+
+    /* stop on block: the motor stops, no force */
+    CHECK_EQ(tdev_move(&t, 0, 90.0f, 400.0f), WSG_E_CMD_PENDING);
+    CHECK_EQ(tdev_final(&t, WSG_CMD_PREPOSITION, 4000), WSG_E_SUCCESS);
+    wsg_axis_set_part(&t.dev.axis, 50.0, 0);
+    CHECK_EQ(tdev_move(&t, WSG_MOVE_STOP_ON_BLOCK, 20.0f, 100.0f),
+             WSG_E_CMD_PENDING);
+    CHECK_EQ(tdev_final(&t, WSG_CMD_PREPOSITION, 4000), WSG_E_AXIS_BLOCKED);
+    CHECK_EQ(tdev_getf(&t, WSG_CMD_GET_FORCE), 0.0f);
+    CHECK(tdev_flags(&t) & WSG_SF_BLOCKED_MINUS);
+    wsg_axis_set_part(&t.dev.axis, -1, 0);
+    tdev_steps(&t, 2000);
+    CHECK_NEAR(t.dev.axis.width, 50.0 - 40.0 / 50.0, 1e-9); /* stays */
+}
+
+static void test_soft_limits(void)
+{
+    struct tdev t;
+
+    tdev_init(&t);
+    CHECK_EQ(tdev_home(&t, 0), WSG_E_SUCCESS);
+    /* outside the range after setting: the flag, and moving out only */
+    CHECK_EQ(tdev_cmd2f(&t, WSG_CMD_SET_SOFT_LIMITS, 20.0f, 100.0f),
+             WSG_E_SUCCESS);
+    CHECK(tdev_flags(&t) & WSG_SF_SOFT_LIMIT_PLUS);
+    CHECK(!(tdev_flags(&t) & WSG_SF_SOFT_LIMIT_MINUS));
+    CHECK_EQ(tdev_move(&t, 0, 105.0f, 50.0f), WSG_E_RANGE_ERROR);
+    CHECK_EQ(tdev_move(&t, 0, 60.0f, 100.0f), WSG_E_CMD_PENDING);
+    CHECK_EQ(tdev_final(&t, WSG_CMD_PREPOSITION, 4000), WSG_E_SUCCESS);
+    CHECK(!(tdev_flags(&t) & WSG_SF_SOFT_LIMIT_PLUS));
+    /* a grasp whose clamping travel runs into the restricted area with no
+     * part: FAST STOP at the limit (3.3.5) */
+    CHECK_EQ(tdev_cmd2f(&t, WSG_CMD_GRASP, 25.0f, 100.0f), WSG_E_CMD_PENDING);
+    CHECK_EQ(tdev_final(&t, WSG_CMD_GRASP, 4000), WSG_E_RANGE_ERROR);
+    CHECK_NEAR(t.dev.axis.width, 20.0, 1e-9);
+    CHECK_EQ(tdev_flags(&t), WSG_SF_REFERENCED | WSG_SF_SOFT_LIMIT_MINUS |
+                                 WSG_SF_FAST_STOP | WSG_SF_CMD_FAILURE);
+    CHECK_EQ(tdev_move(&t, 0, 60.0f, 100.0f), WSG_E_ACCESS_DENIED);
+    CHECK_EQ(tdev_cmd(&t, WSG_CMD_ACK_FAST_STOP, "ack", 3), WSG_E_SUCCESS);
+    tdev_steps(&t, 1);
+    CHECK_EQ(tdev_move(&t, 0, 60.0f, 100.0f), WSG_E_CMD_PENDING);
+    CHECK_EQ(tdev_final(&t, WSG_CMD_PREPOSITION, 4000), WSG_E_SUCCESS);
+    /* homing ignores soft limits */
+    CHECK_EQ(tdev_home(&t, 2), WSG_E_SUCCESS);
+    CHECK_NEAR(t.dev.axis.width, 0.0, 1e-9);
+    CHECK(!(tdev_flags(&t) & WSG_SF_FAST_STOP));
+}
+
+static void test_overdrive(void)
+{
+    struct tdev t;
+    uint8_t on = 1;
+
+    tdev_init(&t);
+    CHECK_EQ(tdev_home(&t, 0), WSG_E_SUCCESS);
+    CHECK_EQ(tdev_cmd(&t, WSG_CMD_OVERDRIVE, &on, 1), WSG_E_SUCCESS);
+    CHECK_EQ(tdev_cmd1f(&t, WSG_CMD_SET_FORCE_LIMIT, 500.0f), WSG_E_SUCCESS);
+    wsg_axis_set_part(&t.dev.axis, 60.0, 0);
+    CHECK_EQ(tdev_cmd2f(&t, WSG_CMD_GRASP, 60.0f, 100.0f), WSG_E_CMD_PENDING);
+    CHECK_EQ(tdev_final(&t, WSG_CMD_GRASP, 4000), WSG_E_SUCCESS);
+    CHECK_NEAR(tdev_getf(&t, WSG_CMD_GET_FORCE), 120.0, 1e-3);
+    CHECK_EQ(tdev_flags(&t), WSG_SF_REFERENCED | WSG_SF_BLOCKED_MINUS |
+                                 WSG_SF_TARGET_POS_REACHED |
+                                 WSG_SF_OVERDRIVE_MODE);
+}
+
+static void test_faults(void)
+{
+    struct tdev t;
+
+    tdev_init(&t);
+    CHECK_EQ(tdev_home(&t, 0), WSG_E_SUCCESS);
+    /* a temperature fault disables movement; a warning does not */
+    wsg_axis_set_fault(&t.dev.axis, WSG_SF_TEMP_WARNING, 1);
+    CHECK(tdev_flags(&t) & WSG_SF_TEMP_WARNING);
+    CHECK_EQ(tdev_move(&t, 0, 50.0f, 100.0f), WSG_E_CMD_PENDING);
+    CHECK_EQ(tdev_final(&t, WSG_CMD_PREPOSITION, 4000), WSG_E_SUCCESS);
+    wsg_axis_set_fault(&t.dev.axis, WSG_SF_TEMP_FAULT, 1);
+    CHECK_EQ(tdev_move(&t, 0, 60.0f, 100.0f), WSG_E_ACCESS_DENIED);
+    wsg_axis_set_fault(&t.dev.axis, WSG_SF_TEMP_FAULT | WSG_SF_TEMP_WARNING,
+                       0);
+    CHECK_EQ(tdev_flags(&t) & WSG_FAULTS, 0);
+    CHECK_EQ(tdev_move(&t, 0, 60.0f, 100.0f), WSG_E_CMD_PENDING);
+}
+
+int main(void)
+{
+    test_durations();
+    test_motion_values();
+    test_homing_time();
+    test_grasp_hold();
+    test_grasp_no_part();
+    test_block();
+    test_soft_limits();
+    test_overdrive();
+    test_faults();
+    TEST_EXIT();
+}
