@@ -1,0 +1,30 @@
+#!/bin/sh
+# Installs the Debian packages wsgemu needs to build and test, and only those
+# that are missing, so it is quick and offline-safe on a prepared machine.
+# Runs apt-get as root, or through sudo when not root.
+set -eu
+
+pkgs="cmake make gcc libc6-dev"
+
+missing=""
+for p in $pkgs; do
+    if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null |
+        grep -q "install ok installed"; then
+        missing="$missing $p"
+    fi
+done
+[ -z "$missing" ] && exit 0
+
+if [ "$(id -u)" -eq 0 ]; then
+    sudo=""
+elif command -v sudo >/dev/null 2>&1; then
+    sudo="sudo"
+else
+    echo "deps.sh: need root (or sudo) to install:$missing" >&2
+    exit 1
+fi
+echo "deps.sh: installing$missing" >&2
+$sudo apt-get update -qq
+# shellcheck disable=SC2086
+DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq \
+    --no-install-recommends $missing
