@@ -1,0 +1,46 @@
+/*
+ * The daemon's command line. Everything the options decide is collected in
+ * one struct, filled with defaults first, so later sources (a config file)
+ * can write the same fields before the command line overrides them.
+ */
+#ifndef WSG_DAEMON_OPTIONS_H
+#define WSG_DAEMON_OPTIONS_H
+
+#include <stdint.h>
+
+#include "wsg/axis.h"
+
+#define WSG_STEP_US_DEFAULT  1000u
+#define WSG_STEP_US_MIN      100u
+#define WSG_STEP_US_MAX      100000u
+#define WSG_TCP_PORT_DEFAULT 1000u
+
+/* An IPv4 endpoint as given on the command line. */
+struct wsg_endpoint {
+    uint8_t addr[4]; /* a.b.c.d in this order */
+    uint16_t port;   /* host order; 0 lets the kernel pick */
+};
+
+struct wsg_options {
+    int tcp_enabled;
+    struct wsg_endpoint tcp;
+    int check_crc;            /* 0 with --no-crc */
+    int disconnect_fast_stop; /* 0 with --no-disconnect-fast-stop */
+    uint32_t step_us;
+    const char *model;           /* NULL: the default model */
+    struct wsg_axis_config axis; /* the model's config, step_us applied */
+};
+
+enum wsg_options_result {
+    WSG_OPTIONS_RUN = 0, /* start the emulator */
+    WSG_OPTIONS_EXIT,    /* done (--help printed): exit status 0 */
+    WSG_OPTIONS_ERROR    /* message printed on stderr: exit status 2 */
+};
+
+void wsg_options_defaults(struct wsg_options *o);
+/* Parse argv over the current contents of o (call wsg_options_defaults
+ * first). Prints usage or a one-line "wsgemu: ..." error itself. */
+enum wsg_options_result wsg_options_parse(struct wsg_options *o, int argc,
+                                          char **argv);
+
+#endif

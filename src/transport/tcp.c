@@ -1,0 +1,550 @@
+/*
+ * The TCP interface (the real gripper's port 1000): a listening socket and
+ * up to WSG_TCP_CONN_MAX connections, each with its own parser, session and
+ * bounded output queue.
+ *
+ * Drivers read a reply with a single recv(), so every packet leaves in one
+ * send() whenever the socket takes it whole. When it does not, the rest and
+ * every later packet wait in the connection's queue, in order, until
+ * EPOLLOUT; a client that lets its queue grow past WSG_TCP_QUEUE_MAX is
+ * dropped rather than slowing anyone else down. Nothing ever blocks.
+ *
+ * A connection that ends (EOF, error, dropped) is only marked during the
+ * event batch, because the device may be in the middle of a call that sends
+ * to it and later events of the batch may name it; settle then reports it to
+ * the device (the FAST STOP rule) and frees it.
+ *
+ * Tags: transport base | generation << 8 | slot. The slot makes lookup
+ * O(1); the generation, counted per accepted connection, keeps a slot's
+ * next occupant from receiving a result meant for its previous one.
+ */
+#define _GNU_SOURCE
+
+#include <arpa/inet.h>
+#include <errno.h>
+#include <fcntl.h>
+#include <netinet/in.h>
+#include <netinet/tcp.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/epoll.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include "transport.h"
+
+#define WSG_TCP_SLOT_BITS         8
+#define WSG_TCP_CONN_MAX          (1u << WSG_TCP_SLOT_BITS)
+#define WSG_TCP_SLOT_MASK         (WSG_TCP_CONN_MAX - 1u)
+#define WSG_TCP_GEN_MASK          (WSG_TAG_LOCAL_MASK >> WSG_TCP_SLOT_BITS)
+#define WSG_TCP_QUEUE_MAX         65536u
+#define WSG_TCP_READ_CHUNK        4096u
+#define WSG_TCP_READS_PER_EVENT   16
+#define WSG_TCP_ACCEPTS_PER_EVENT 16
+#define WSG_TCP_BACKLOG           64
+#define WSG_TCP_ADDR_LEN          (INET_ADDRSTRLEN + 6)
+
+struct wsg_tcp;
+
+struct wsg_tcp_conn {
+    struct wsg_watch watch; /* first: epoll hands back &watch */
+    struct wsg_tcp *tcp;
+    unsigned slot;
+    int dead;
+    uint32_t events; /* as registered with epoll */
+    char peer[WSG_TCP_ADDR_LEN];
+    struct wsg_parser parser;
+    struct wsg_session session;
+    size_t qhead, qlen; /* pending output: queue[qhead .. qhead+qlen) */
+    uint8_t queue[WSG_TCP_QUEUE_MAX];
+};
+
+struct wsg_tcp {
+    struct wsg_watch watch; /* the listening socket */
+    struct wsg_transport *t;
+    struct wsg_loop *loop;
+    struct wsg_device *dev;
+    uint32_t tag_base;
+    int check_crc;
+    /* Held to be given up when accept hits EMFILE, so the pending
+     * connection can be taken and closed instead of waking us forever. */
+    int spare_fd;
+    uint32_t next_gen;
+    unsigned nconns;
+    unsigned ndead;
+    char local[WSG_TCP_ADDR_LEN];
+    struct wsg_tcp_conn *slots[WSG_TCP_CONN_MAX];
+};
+
+static void format_addr(char *buf, size_t len, const struct sockaddr_in *sa)
+{
+    char ip[INET_ADDRSTRLEN];
+
+    if (!inet_ntop(AF_INET, &sa->sin_addr, ip, sizeof ip))
+        strcpy(ip, "?");
+    snprintf(buf, len, "%s:%u", ip, (unsigned)ntohs(sa->sin_port));
+}
+
+static void conn_kill(struct wsg_tcp_conn *c, const char *why)
+{
+    if (c->dead)
+        return;
+    c->dead = 1;
+    c->tcp->ndead++;
+    if (why)
+        fprintf(stderr, "wsgemu: tcp %s: closing: %s\n", c->peer, why);
+}
+
+static void conn_set_events(struct wsg_tcp_conn *c, uint32_t events)
+{
+    int r;
+
+    if (c->events == events)
+        return;
+    r = wsg_loop_watch_mod(c->tcp->loop, &c->watch, events);
+    if (r < 0) {
+        conn_kill(c, strerror(-r));
+        return;
+    }
+    c->events = events;
+}
+
+static int send_errno_is_peer_gone(int e)
+{
+    return e == EPIPE || e == ECONNRESET || e == ETIMEDOUT ||
+           e == EHOSTUNREACH || e == ENETUNREACH;
+}
+
+/* One send() of as much as the socket takes. Returns bytes sent (0 when
+ * the socket is full) or -errno. */
+static ssize_t conn_send(struct wsg_tcp_conn *c, const uint8_t *p, size_t len)
+{
+    for (;;) {
+        ssize_t n = send(c->watch.fd, p, len, MSG_NOSIGNAL | MSG_DONTWAIT);
+
+        if (n >= 0)
+            return n;
+        if (errno == EINTR)
+            continue;
+        if (errno == EAGAIN || errno == EWOULDBLOCK)
+            return 0;
+        return -errno;
+    }
+}
+
+static void conn_send_failed(struct wsg_tcp_conn *c, int err)
+{
+    conn_kill(c, send_errno_is_peer_gone(err) ? NULL : strerror(err));
+}
+
+static void conn_enqueue(struct wsg_tcp_conn *c, const uint8_t *p, size_t len)
+{
+    if (c->qlen + len > WSG_TCP_QUEUE_MAX) {
+        conn_kill(c, "output queue over 64 KiB (client not reading)");
+        return;
+    }
+    if (c->qhead + c->qlen + len > WSG_TCP_QUEUE_MAX) {
+        memmove(c->queue, c->queue + c->qhead, c->qlen);
+        c->qhead = 0;
+    }
+    memcpy(c->queue + c->qhead + c->qlen, p, len);
+    c->qlen += len;
+    conn_set_events(c, c->events | EPOLLOUT);
+}
+
+/* The session's send callback: one packet. */
+static void conn_packet(struct wsg_session *s, const uint8_t *pkt, size_t len)
+{
+    struct wsg_tcp_conn *c = s->ctx;
+    ssize_t n;
+
+    if (c->dead)
+        return;
+    /* Behind queued bytes a packet must wait its turn, or it would land in
+     * the middle of an earlier one. */
+    if (c->qlen > 0) {
+        conn_enqueue(c, pkt, len);
+        return;
+    }
+    n = conn_send(c, pkt, len);
+    if (n < 0) {
+        conn_send_failed(c, (int)-n);
+        return;
+    }
+    if ((size_t)n < len)
+        conn_enqueue(c, pkt + n, len - (size_t)n);
+}
+
+static void conn_flush(struct wsg_tcp_conn *c)
+{
+    ssize_t n;
+
+    if (c->dead || c->qlen == 0)
+        return;
+    /* The whole queue in one call: what the socket does not take now waits
+     * for the next EPOLLOUT. */
+    n = conn_send(c, c->queue + c->qhead, c->qlen);
+    if (n < 0) {
+        conn_send_failed(c, (int)-n);
+        return;
+    }
+    c->qhead += (size_t)n;
+    c->qlen -= (size_t)n;
+    if (c->qlen == 0) {
+        c->qhead = 0;
+        conn_set_events(c, c->events & ~(uint32_t)EPOLLOUT);
+    }
+}
+
+static void conn_read(struct wsg_tcp_conn *c)
+{
+    uint8_t buf[WSG_TCP_READ_CHUNK];
+    int i;
+
+    /* Bounded, so one busy client cannot starve the others or the model's
+     * steps; the level-triggered watch brings us back for the rest. */
+    for (i = 0; i < WSG_TCP_READS_PER_EVENT && !c->dead; i++) {
+        ssize_t n = recv(c->watch.fd, buf, sizeof buf, MSG_DONTWAIT);
+
+        if (n > 0) {
+            wsg_device_input(c->tcp->dev, &c->session, &c->parser, buf,
+                             (size_t)n);
+            if ((size_t)n < sizeof buf)
+                return;
+            continue;
+        }
+        if (n == 0) {
+            conn_kill(c, NULL);
+            return;
+        }
+        if (errno == EINTR)
+            continue;
+        if (errno == EAGAIN || errno == EWOULDBLOCK)
+            return;
+        conn_kill(c, errno == ECONNRESET || errno == ETIMEDOUT
+                         ? NULL
+                         : strerror(errno));
+        return;
+    }
+}
+
+static void conn_free(struct wsg_tcp *tcp, struct wsg_tcp_conn *c)
+{
+    wsg_loop_watch_del(tcp->loop, &c->watch);
+    close(c->watch.fd);
+    tcp->slots[c->slot] = NULL;
+    tcp->nconns--;
+    if (c->dead)
+        tcp->ndead--;
+    free(c);
+}
+
+/* Report the close to the device while the session still exists, then make
+ * it unreachable. */
+static void conn_close(struct wsg_tcp *tcp, struct wsg_tcp_conn *c)
+{
+    if (!c->dead) {
+        c->dead = 1;
+        tcp->ndead++;
+    }
+    wsg_device_session_closed(tcp->dev, &c->session);
+    conn_free(tcp, c);
+}
+
+static int free_slot(const struct wsg_tcp *tcp)
+{
+    unsigned i;
+
+    for (i = 0; i < WSG_TCP_CONN_MAX; i++)
+        if (!tcp->slots[i])
+            return (int)i;
+    return -1;
+}
+
+static uint32_t next_tag(struct wsg_tcp *tcp, unsigned slot)
+{
+    uint32_t gen = tcp->next_gen;
+
+    tcp->next_gen = (gen + 1) & WSG_TCP_GEN_MASK;
+    return tcp->tag_base | gen << WSG_TCP_SLOT_BITS | slot;
+}
+
+static void accept_overflow(struct wsg_tcp *tcp, int err)
+{
+    int fd;
+
+    if (tcp->spare_fd < 0)
+        return;
+    close(tcp->spare_fd);
+    fd = accept4(tcp->watch.fd, NULL, NULL, SOCK_CLOEXEC);
+    if (fd >= 0)
+        close(fd);
+    tcp->spare_fd = open("/dev/null", O_RDONLY | O_CLOEXEC);
+    fprintf(stderr, "wsgemu: tcp %s: refused a connection: %s\n", tcp->local,
+            strerror(err));
+}
+
+static void conn_accept(struct wsg_tcp *tcp, int fd,
+                        const struct sockaddr_in *peer)
+{
+    struct wsg_tcp_conn *c;
+    char name[WSG_TCP_ADDR_LEN];
+    int one = 1;
+    int slot;
+    int r;
+
+    format_addr(name, sizeof name, peer);
+    slot = free_slot(tcp);
+    if (slot < 0) {
+        /* Accepted only to be closed at once: the client sees a clean
+         * refusal instead of hanging in the backlog. */
+        fprintf(stderr, "wsgemu: tcp %s: refused: %u connections open\n", name,
+                WSG_TCP_CONN_MAX);
+        close(fd);
+        return;
+    }
+    /* The queue is the bulk of the struct and needs no initial value. */
+    c = malloc(sizeof *c);
+    if (!c) {
+        fprintf(stderr, "wsgemu: tcp %s: refused: %s\n", name,
+                strerror(ENOMEM));
+        close(fd);
+        return;
+    }
+    memset(c, 0, offsetof(struct wsg_tcp_conn, queue));
+    /* Small replies must leave at once, not wait for Nagle. */
+    if (setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one) < 0)
+        fprintf(stderr, "wsgemu: tcp %s: TCP_NODELAY: %s\n", name,
+                strerror(errno));
+    c->watch.owner = tcp->t;
+    c->watch.fd = fd;
+    c->tcp = tcp;
+    c->slot = (unsigned)slot;
+    c->events = EPOLLIN | EPOLLRDHUP;
+    memcpy(c->peer, name, sizeof name);
+    r = wsg_loop_watch_add(tcp->loop, &c->watch, c->events);
+    if (r < 0) {
+        fprintf(stderr, "wsgemu: tcp %s: refused: %s\n", name, strerror(-r));
+        close(fd);
+        free(c);
+        return;
+    }
+    wsg_parser_init(&c->parser, tcp->check_crc);
+    wsg_session_init(&c->session, next_tag(tcp, (unsigned)slot),
+                     WSG_SESSION_CONNECTION, conn_packet, c);
+    tcp->slots[slot] = c;
+    tcp->nconns++;
+}
+
+static void on_listen(struct wsg_tcp *tcp)
+{
+    int i;
+
+    for (i = 0; i < WSG_TCP_ACCEPTS_PER_EVENT; i++) {
+        struct sockaddr_in peer;
+        socklen_t plen = sizeof peer;
+        int fd = accept4(tcp->watch.fd, (struct sockaddr *)&peer, &plen,
+                         SOCK_NONBLOCK | SOCK_CLOEXEC);
+
+        if (fd < 0) {
+            if (errno == EAGAIN || errno == EWOULDBLOCK)
+                return;
+            if (errno == EMFILE || errno == ENFILE) {
+                accept_overflow(tcp, errno);
+                return;
+            }
+            /* ECONNABORTED, EINTR, a network error on one pending
+             * connection: the next one may be fine. */
+            continue;
+        }
+        conn_accept(tcp, fd, &peer);
+    }
+}
+
+static void tcp_handle(struct wsg_transport *t, struct wsg_watch *w,
+                       uint32_t events)
+{
+    struct wsg_tcp *tcp = t->state;
+    struct wsg_tcp_conn *c;
+
+    if (w == &tcp->watch) {
+        on_listen(tcp);
+        return;
+    }
+    c = (struct wsg_tcp_conn *)w;
+    if (c->dead)
+        return;
+    /* Queued output first: new replies belong behind it. */
+    if (events & EPOLLOUT)
+        conn_flush(c);
+    /* HUP and ERR are read too: data that came before the close (a 07h
+     * Disconnect Announcement) must count, and recv reports the error. */
+    if (events & (EPOLLIN | EPOLLRDHUP | EPOLLHUP | EPOLLERR))
+        conn_read(c);
+}
+
+static struct wsg_session *tcp_lookup(struct wsg_transport *t, uint32_t tag)
+{
+    struct wsg_tcp *tcp = t->state;
+    struct wsg_tcp_conn *c = tcp->slots[tag & WSG_TCP_SLOT_MASK];
+
+    if (!c || c->dead || c->session.tag != tag)
+        return NULL;
+    return &c->session;
+}
+
+static void tcp_each_session(struct wsg_transport *t, wsg_session_visit_fn fn,
+                             void *ctx)
+{
+    struct wsg_tcp *tcp = t->state;
+    unsigned i, seen = 0;
+
+    for (i = 0; i < WSG_TCP_CONN_MAX && seen < tcp->nconns; i++) {
+        struct wsg_tcp_conn *c = tcp->slots[i];
+
+        if (!c)
+            continue;
+        seen++;
+        if (!c->dead)
+            fn(ctx, &c->session);
+    }
+}
+
+static void tcp_settle(struct wsg_transport *t)
+{
+    struct wsg_tcp *tcp = t->state;
+    unsigned i;
+
+    for (i = 0; i < WSG_TCP_CONN_MAX && tcp->ndead > 0; i++) {
+        struct wsg_tcp_conn *c = tcp->slots[i];
+
+        if (c && c->dead)
+            conn_close(tcp, c);
+    }
+}
+
+static int tcp_describe(const struct wsg_transport *t, char *buf, size_t len)
+{
+    const struct wsg_tcp *tcp = t->state;
+    int r = snprintf(buf, len, "%s", tcp->local);
+
+    return r < 0 || (size_t)r >= len ? -ENOSPC : 0;
+}
+
+static void tcp_close(struct wsg_transport *t)
+{
+    struct wsg_tcp *tcp = t->state;
+    unsigned i;
+
+    if (!tcp)
+        return;
+    for (i = 0; i < WSG_TCP_CONN_MAX; i++)
+        if (tcp->slots[i])
+            conn_close(tcp, tcp->slots[i]);
+    if (tcp->watch.fd >= 0) {
+        wsg_loop_watch_del(tcp->loop, &tcp->watch);
+        close(tcp->watch.fd);
+    }
+    if (tcp->spare_fd >= 0)
+        close(tcp->spare_fd);
+    free(tcp);
+    t->state = NULL;
+}
+
+static int tcp_open(struct wsg_transport *t,
+                    const struct wsg_transport_env *env, char *err,
+                    size_t errlen)
+{
+    const struct wsg_endpoint *ep = &env->opt->tcp;
+    struct wsg_tcp *tcp;
+    struct sockaddr_in sa;
+    socklen_t salen = sizeof sa;
+    char where[WSG_TCP_ADDR_LEN];
+    const char *step = "socket";
+    int one = 1;
+    int r;
+
+    memset(&sa, 0, sizeof sa);
+    sa.sin_family = AF_INET;
+    memcpy(&sa.sin_addr.s_addr, ep->addr, 4);
+    sa.sin_port = htons(ep->port);
+    format_addr(where, sizeof where, &sa);
+
+    tcp = calloc(1, sizeof *tcp);
+    if (!tcp) {
+        r = -ENOMEM;
+        step = "setup";
+        goto fail;
+    }
+    t->state = tcp;
+    tcp->t = t;
+    tcp->loop = env->loop;
+    tcp->dev = env->dev;
+    tcp->tag_base = t->tag_base;
+    tcp->check_crc = env->opt->check_crc;
+    tcp->next_gen = 0;
+    tcp->watch.owner = t;
+    tcp->spare_fd = open("/dev/null", O_RDONLY | O_CLOEXEC);
+    tcp->watch.fd =
+        socket(AF_INET, SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
+    if (tcp->watch.fd < 0)
+        goto fail_errno;
+    /* A restarted emulator must not wait out TIME_WAIT of its previous
+     * run's connections. */
+    step = "SO_REUSEADDR";
+    if (setsockopt(tcp->watch.fd, SOL_SOCKET, SO_REUSEADDR, &one, sizeof one) <
+        0)
+        goto fail_errno;
+    step = NULL; /* the usual failure: the reason says it all */
+    if (bind(tcp->watch.fd, (struct sockaddr *)&sa, sizeof sa) < 0)
+        goto fail_errno;
+    step = "listen";
+    if (listen(tcp->watch.fd, WSG_TCP_BACKLOG) < 0)
+        goto fail_errno;
+    step = "getsockname";
+    if (getsockname(tcp->watch.fd, (struct sockaddr *)&sa, &salen) < 0)
+        goto fail_errno;
+    format_addr(tcp->local, sizeof tcp->local, &sa);
+    step = "epoll";
+    r = wsg_loop_watch_add(tcp->loop, &tcp->watch, EPOLLIN);
+    if (r < 0)
+        goto fail;
+    return 0;
+
+fail_errno:
+    r = -errno;
+fail:
+    if (r == -EACCES && ep->port < 1024)
+        snprintf(err, errlen,
+                 "cannot listen on tcp %s: %s (ports below 1024 need root "
+                 "or CAP_NET_BIND_SERVICE; --tcp 127.0.0.1:PORT picks "
+                 "another)",
+                 where, strerror(-r));
+    else if (!step)
+        snprintf(err, errlen, "cannot listen on tcp %s: %s", where,
+                 strerror(-r));
+    else
+        snprintf(err, errlen, "cannot listen on tcp %s: %s: %s", where, step,
+                 strerror(-r));
+    if (tcp) {
+        if (tcp->watch.fd >= 0)
+            close(tcp->watch.fd);
+        if (tcp->spare_fd >= 0)
+            close(tcp->spare_fd);
+        free(tcp);
+    }
+    t->state = NULL;
+    return r;
+}
+
+const struct wsg_transport_ops wsg_tcp_ops = {
+    .name = "tcp",
+    .open = tcp_open,
+    .close = tcp_close,
+    .handle = tcp_handle,
+    .describe = tcp_describe,
+    .lookup = tcp_lookup,
+    .each_session = tcp_each_session,
+    .settle = tcp_settle,
+};

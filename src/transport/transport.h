@@ -1,0 +1,80 @@
+/*
+ * The interface every host interface of the emulator implements (TCP now;
+ * UDP, pty and CAN later): an ops table plus a small generic record. A
+ * transport keeps all its state in its own struct behind t->state and
+ * registers its descriptors with the loop through struct wsg_watch.
+ *
+ * Session tags carry the transport's index in their top bits, so the
+ * device's single lookup callback finds the owning transport in O(1) and the
+ * transport resolves the rest (typically a slot index plus a generation).
+ */
+#ifndef WSG_TRANSPORT_H
+#define WSG_TRANSPORT_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "loop.h"
+#include "options.h"
+#include "wsg/device.h"
+
+#define WSG_TRANSPORT_MAX 8u
+/* tag = (index + 1) << 28 | local: never 0, at most 15 transports. */
+#define WSG_TAG_TRANSPORT_SHIFT 28
+#define WSG_TAG_LOCAL_MASK      ((1u << WSG_TAG_TRANSPORT_SHIFT) - 1u)
+
+struct wsg_transport;
+
+/* What a transport gets from the daemon when it opens. */
+struct wsg_transport_env {
+    struct wsg_loop *loop;
+    struct wsg_device *dev;
+    const struct wsg_options *opt;
+};
+
+typedef void (*wsg_session_visit_fn)(void *ctx, struct wsg_session *s);
+
+struct wsg_transport_ops {
+    const char *name; /* key on the ready line: "tcp" */
+    /* Open from env->opt; on failure put a one-line reason (naming the
+     * address) in err and return -errno. */
+    int (*open)(struct wsg_transport *t, const struct wsg_transport_env *env,
+                char *err, size_t errlen);
+    /* Close every peer (wsg_device_session_closed first), free all. */
+    void (*close)(struct wsg_transport *t);
+    /* An epoll event on one of the transport's watches. Must not free
+     * anything a later event of the same epoll_wait batch may name: peers
+     * that go away are only marked, and freed by settle. */
+    void (*handle)(struct wsg_transport *t, struct wsg_watch *w,
+                   uint32_t events);
+    /* The value for the ready line, e.g. "127.0.0.1:41234". */
+    int (*describe)(const struct wsg_transport *t, char *buf, size_t len);
+    /* Optional (NULL: no sessions). A live session by tag, else NULL. */
+    struct wsg_session *(*lookup)(struct wsg_transport *t, uint32_t tag);
+    /* Optional. Visit every live session. */
+    void (*each_session)(struct wsg_transport *t, wsg_session_visit_fn fn,
+                         void *ctx);
+    /* Optional. Between epoll batches: finish closing marked peers. */
+    void (*settle)(struct wsg_transport *t);
+};
+
+struct wsg_transport {
+    const struct wsg_transport_ops *ops;
+    void *state;       /* the transport's own struct */
+    uint32_t tag_base; /* (index + 1) << WSG_TAG_TRANSPORT_SHIFT */
+};
+
+extern const struct wsg_transport_ops wsg_tcp_ops;
+
+/* Route a tag to the transport that issued it. */
+struct wsg_session *wsg_transport_lookup(struct wsg_transport *ts, size_t n,
+                                         uint32_t tag);
+void wsg_transport_each_session(struct wsg_transport *ts, size_t n,
+                                wsg_session_visit_fn fn, void *ctx);
+void wsg_transport_settle(struct wsg_transport *ts, size_t n);
+/* "ready tcp=127.0.0.1:41234 ...": the ready line without its newline.
+ * Returns 0 or -ENOSPC. */
+int wsg_transport_ready_line(const struct wsg_transport *ts, size_t n,
+                             char *buf, size_t len);
+
+#endif
