@@ -230,8 +230,7 @@ int emu_start(struct emu *e, const char *exe, const char *const *args)
         if (r < 0 && errno == EINTR)
             continue;
         if (r <= 0) {
-            fprintf(stderr, "emu: no ready line within %d ms\n",
-                    EMU_READY_MS);
+            fprintf(stderr, "emu: no ready line within %d ms\n", EMU_READY_MS);
             break;
         }
         ssize_t got = read(e->out_fd, e->line + n, sizeof(e->line) - 1 - n);
@@ -386,6 +385,9 @@ const char *emu_exe(int argc, char **argv)
         printf("SKIP: no daemon executable given (argv[1])\n");
         exit(77);
     }
+    /* Line by line, so that progress and CHECK messages (stderr) come out
+     * interleaved in order in ctest's log. */
+    setvbuf(stdout, NULL, _IOLBF, 0);
     /* A write to a connection the daemon has reset must fail with EPIPE,
      * not kill the test. */
     signal(SIGPIPE, SIG_IGN);
@@ -573,8 +575,7 @@ int emu_send_raw(struct emu_client *c, const void *pkt, size_t len)
     return c->tp->send(c, pkt, len);
 }
 
-int emu_send(struct emu_client *c, uint8_t id, const void *payload,
-             size_t len)
+int emu_send(struct emu_client *c, uint8_t id, const void *payload, size_t len)
 {
     uint8_t pkt[WSG_HEADER_LEN + 1024 + WSG_CRC_LEN];
     size_t n = wsg_frame_encode(pkt, sizeof(pkt), id, payload, len);
@@ -633,8 +634,7 @@ static int next_wire(struct emu_client *c, struct emu_frame *f,
 static void keep_push(struct emu_client *c, const struct emu_frame *f)
 {
     if (c->keep_n == EMU_KEEP) {
-        memmove(&c->keep[0], &c->keep[1],
-                (EMU_KEEP - 1) * sizeof(c->keep[0]));
+        memmove(&c->keep[0], &c->keep[1], (EMU_KEEP - 1) * sizeof(c->keep[0]));
         c->keep_n--;
     }
     c->keep[c->keep_n++] = *f;
@@ -754,6 +754,26 @@ int emu_wait_flags(struct emu_client *c, uint32_t mask, uint32_t want,
     return r;
 }
 
+int emu_wait_float(struct emu_client *c, uint8_t id, float lo, float hi,
+                   int timeout_ms, float *v)
+{
+    double deadline = emu_now_ms() + timeout_ms;
+    float x = 0;
+    int r = -1;
+    for (;;) {
+        if (emu_get_float(c, id, &x) == 0 && x >= lo && x <= hi) {
+            r = 0;
+            break;
+        }
+        if (emu_now_ms() >= deadline)
+            break;
+        emu_sleep_ms(5);
+    }
+    if (v)
+        *v = x;
+    return r;
+}
+
 int emu_motion(struct emu_client *c, uint8_t id, const void *payload,
                size_t len, int timeout_ms, int *immediate)
 {
@@ -768,8 +788,7 @@ int emu_motion(struct emu_client *c, uint8_t id, const void *payload,
     return (int)f.status;
 }
 
-size_t emu_move_payload(uint8_t *out, uint8_t flags, float width,
-                        float speed)
+size_t emu_move_payload(uint8_t *out, uint8_t flags, float width, float speed)
 {
     out[0] = flags;
     wsg_put_f32(out + 1, width);

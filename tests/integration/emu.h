@@ -72,7 +72,7 @@ struct emu_frame {
     uint8_t payload[WSG_REPLY_PAYLOAD_MAX];
 };
 /* The parameters after the status. */
-#define EMU_PARAMS(f) ((f)->payload + 2)
+#define EMU_PARAMS(f)  ((f)->payload + 2)
 #define EMU_NPARAMS(f) ((f)->len >= 2 ? (f)->len - 2 : 0)
 
 /* Check that buf holds exactly one packet with a valid preamble, SIZE and
@@ -162,14 +162,17 @@ int emu_get_float(struct emu_client *c, uint8_t id, float *v);
  * not NULL) gets the last value read. */
 int emu_wait_flags(struct emu_client *c, uint32_t mask, uint32_t want,
                    int timeout_ms, uint32_t *flags);
+/* Poll a float reading (43h, 44h, 45h) until lo <= value <= hi. 0, or -1
+ * on timeout; v (if not NULL) gets the last value read. */
+int emu_wait_float(struct emu_client *c, uint8_t id, float lo, float hi,
+                   int timeout_ms, float *v);
 /* A motion command: the immediate reply into *immediate; when it is
  * E_CMD_PENDING, wait up to timeout_ms for the final result and return
  * it, else return the immediate status. -1 on timeout. */
 int emu_motion(struct emu_client *c, uint8_t id, const void *payload,
                size_t len, int timeout_ms, int *immediate);
 /* Payload of Preposition (21h) / Grasp (25h) / Release (26h). */
-size_t emu_move_payload(uint8_t *out, uint8_t flags, float width,
-                        float speed);
+size_t emu_move_payload(uint8_t *out, uint8_t flags, float width, float speed);
 size_t emu_grasp_payload(uint8_t *out, float width, float speed);
 
 /* Monotonic milliseconds. */

@@ -136,8 +136,7 @@ static void test_single_recv(const struct emu *e)
     /* Repeated, since a daemon writing in pieces is caught only when the
      * pieces happen to be read apart. */
     for (int round = 0; round < 20; round++) {
-        for (size_t i = 0; i < sizeof(loop_sizes) / sizeof(loop_sizes[0]);
-             i++)
+        for (size_t i = 0; i < sizeof(loop_sizes) / sizeof(loop_sizes[0]); i++)
             single_recv(&c, WSG_CMD_LOOP, p, loop_sizes[i], loop_sizes[i]);
         single_recv(&c, WSG_CMD_GET_SYSTEM_STATE, NULL, 0, 4);
         single_recv(&c, WSG_CMD_GET_WIDTH, NULL, 0, 4);
@@ -400,6 +399,23 @@ static void bad_option(const char *exe, const char *const *args)
     CHECK(strstr(out, "ready") == NULL);
 }
 
+/* The options of the contract, all at once, are accepted. */
+static void test_good_options(const char *exe)
+{
+    static const char *const args[] = {
+        "--tcp",     "127.0.0.1:0", "--no-crc", "--no-disconnect-fast-stop",
+        "--step-us", "2000",        NULL};
+    struct emu e;
+    struct emu_client c;
+    REQUIRE(emu_start(&e, exe, args) == 0);
+    CHECK(ready_line_ok(e.line));
+    REQUIRE(emu_open(&c, &e, &emu_tcp) == 0);
+    CHECK_EQ(emu_request(&c, WSG_CMD_LOOP, "g", 1, NULL, EMU_REPLY_MS),
+             WSG_E_SUCCESS);
+    emu_close(&c);
+    CHECK_EQ(emu_stop(&e), 0);
+}
+
 static void test_bad_options(const char *exe)
 {
     static const char *const a1[] = {"--bogus", NULL};
@@ -422,6 +438,7 @@ int main(int argc, char **argv)
 
     test_ready_line(exe);
     test_bad_options(exe);
+    test_good_options(exe);
 
     REQUIRE(emu_start(&e, exe, tcp_args) == 0);
     test_single_recv(&e);

@@ -25,7 +25,7 @@
 #include <string.h>
 
 #define HOMING_MS 4000
-#define MOVE_MS 5000
+#define MOVE_MS   5000
 
 static const uint8_t stream_ids[] = {
     WSG_CMD_GET_SYSTEM_STATE, WSG_CMD_GET_GRASP_STATE, WSG_CMD_GET_WIDTH,
@@ -210,8 +210,8 @@ static void test_change_only(const struct emu *e)
     unsigned nspeed = 0;
     for (;;) {
         /* After the result: two periods more for the last changes. */
-        if (t_end > 0 && emu_now_ms() > t_end + 2 * PERIOD + 50)
-            break;
+        if (t_end > 0)
+            deadline = t_end + 2 * PERIOD + 50;
         int left = (int)(deadline - emu_now_ms());
         if (left <= 0 || emu_recv(&s, &f, left) != 1)
             break;
@@ -308,8 +308,11 @@ static void test_several(const struct emu *e)
     /* Each subscription's first packet of its ID is its reply: no stream
      * of that ID ran before. */
     for (unsigned i = 0; i < NSTREAMS; i++) {
+        double t0 = emu_now_ms();
         CHECK_EQ(subscribe(&s, stream_ids[i], 0x01, periods[i], &f),
                  WSG_E_SUCCESS);
+        /* NOTES: clients expect the subscription's reply within 250 ms. */
+        CHECK(f.t_ms - t0 < 250);
         check_value_frame(&f);
     }
     for (unsigned i = 0; i < NSTREAMS; i++)
@@ -320,9 +323,9 @@ static void test_several(const struct emu *e)
     uint8_t tok[5] = {1, 2, 3, 4, 5};
     for (int round = 0; round < 5; round++) {
         tok[0] = (uint8_t)round;
-        CHECK_EQ(emu_request(&s, WSG_CMD_LOOP, tok, sizeof(tok), &f,
-                             EMU_REPLY_MS),
-                 WSG_E_SUCCESS);
+        CHECK_EQ(
+            emu_request(&s, WSG_CMD_LOOP, tok, sizeof(tok), &f, EMU_REPLY_MS),
+            WSG_E_SUCCESS);
         CHECK(f.len == 7 && memcmp(EMU_PARAMS(&f), tok, 5) == 0);
         CHECK_EQ(emu_request(&s, WSG_CMD_GET_ACCELERATION, NULL, 0, &f,
                              EMU_REPLY_MS),
@@ -393,40 +396,58 @@ static void test_several(const struct emu *e)
 
 static void test_one_time(const struct emu *e)
 {
-    struct emu_client s;
-    struct emu_frame f;
+    enum { NV = 3 };
     /* Empty payload; FLAGS 0 with a period; change-only without the auto
-     * update bit (bit 0 clear: "auto update is disabled"). */
-    static const uint8_t flags0[3] = {0x00, 50, 0}, flags2[3] = {0x02, 20, 0};
+     * update bit (bit 0 clear: "auto update is disabled"). One connection
+     * each, so that no later request could end a stream an earlier one
+     * started by mistake. */
+    static const uint8_t flags0[3] = {0x00, 20, 0}, flags2[3] = {0x02, 20, 0};
+    static const uint8_t *const payload[NV] = {NULL, flags0, flags2};
+    static const size_t plen[NV] = {0, 3, 3};
+    struct emu_client c[NV], m;
+    struct emu_frame f;
 
-    REQUIRE(emu_open(&s, e, &emu_tcp) == 0);
+    for (int v = 0; v < NV; v++) {
+        REQUIRE(emu_open(&c[v], e, &emu_tcp) == 0);
+        for (unsigned i = 0; i < NSTREAMS; i++) {
+            CHECK_EQ(emu_request(&c[v], stream_ids[i], payload[v], plen[v], &f,
+                                 EMU_REPLY_MS),
+                     WSG_E_SUCCESS);
+            check_value_frame(&f);
+        }
+    }
+    /* Every value changes during a motion, so a stream started by mistake
+     * (even a change-only one) would send something. */
+    REQUIRE(emu_open(&m, e, &emu_tcp) == 0);
+    uint8_t p[16];
+    size_t n = emu_move_payload(p, 0, 70.0f, 400.0f);
+    CHECK_EQ(emu_motion(&m, WSG_CMD_PREPOSITION, p, n, MOVE_MS, NULL),
+             WSG_E_SUCCESS);
+    for (int v = 0; v < NV; v++) {
+        REQUIRE(emu_sync(&c[v], EMU_REPLY_MS) == 0);
+        for (unsigned i = 0; i < NSTREAMS; i++)
+            CHECK_EQ(c[v].seen[stream_ids[i]], 1);
+        CHECK_EQ(c[v].bad, 0);
+        CHECK_EQ(emu_request(&c[v], WSG_CMD_DISCONNECT, NULL, 0, NULL,
+                             EMU_REPLY_MS),
+                 WSG_E_SUCCESS);
+        emu_close(&c[v]);
+    }
+
+    /* Neither empty nor FLAGS + PERIOD_MS: "Command length mismatch". */
     for (unsigned i = 0; i < NSTREAMS; i++) {
-        uint8_t id = stream_ids[i];
-        CHECK_EQ(emu_request(&s, id, NULL, 0, &f, EMU_REPLY_MS),
-                 WSG_E_SUCCESS);
-        check_value_frame(&f);
-        CHECK_EQ(emu_request(&s, id, flags0, 3, &f, EMU_REPLY_MS),
-                 WSG_E_SUCCESS);
-        check_value_frame(&f);
-        CHECK_EQ(emu_request(&s, id, flags2, 3, &f, EMU_REPLY_MS),
-                 WSG_E_SUCCESS);
-        check_value_frame(&f);
-        /* Neither empty nor FLAGS + PERIOD_MS: "Command length
-         * mismatch". */
-        CHECK_EQ(emu_request(&s, id, flags0, 2, &f, EMU_REPLY_MS),
+        CHECK_EQ(emu_request(&m, stream_ids[i], flags0, 2, &f, EMU_REPLY_MS),
                  WSG_E_CMD_FORMAT_ERROR);
         CHECK_EQ(f.len, 2);
+        CHECK_EQ(emu_request(&m, stream_ids[i], flags2, 1, &f, EMU_REPLY_MS),
+                 WSG_E_CMD_FORMAT_ERROR);
     }
-    REQUIRE(emu_sync(&s, EMU_REPLY_MS) == 0);
-    for (unsigned i = 0; i < NSTREAMS; i++)
-        CHECK_EQ(s.seen[stream_ids[i]], 4);
     unsigned others = 0;
-    CHECK_EQ(count_for(&s, 0, EMU_QUIET_MS, &others), 0);
+    CHECK_EQ(count_for(&m, 0, EMU_QUIET_MS, &others), 0);
     CHECK_EQ(others, 0);
-    CHECK_EQ(s.bad, 0);
-    CHECK_EQ(emu_request(&s, WSG_CMD_DISCONNECT, NULL, 0, NULL, EMU_REPLY_MS),
+    CHECK_EQ(emu_request(&m, WSG_CMD_DISCONNECT, NULL, 0, NULL, EMU_REPLY_MS),
              WSG_E_SUCCESS);
-    emu_close(&s);
+    emu_close(&m);
 }
 
 /* Subscribe to all five at period ms and wait until packets flow. */
@@ -456,13 +477,16 @@ static void test_dropped(const struct emu *e)
     CHECK_EQ(count_for(&n, 0, EMU_QUIET_MS, &others), 0);
     CHECK_EQ(others, 0);
 
-    /* A reset with stream data unread: the daemon's next writes fail and
-     * it must shrug that off (a SIGPIPE would kill it). */
+    /* Resets with stream data unread, at a period of 1 ms so that the
+     * daemon writes to the dead connection before it reads of its end: its
+     * writes fail, and it must shrug that off (a SIGPIPE would kill it). */
+    for (int i = 0; i < 5; i++) {
+        REQUIRE(emu_open(&d, e, &emu_tcp) == 0);
+        flood(&d, 1);
+        emu_abort(&d);
+    }
     REQUIRE(emu_open(&d, e, &emu_tcp) == 0);
-    flood(&d, 5);
-    emu_abort(&d);
-    REQUIRE(emu_open(&d, e, &emu_tcp) == 0);
-    flood(&d, 5);
+    flood(&d, 1);
     emu_close(&d); /* FIN with unread data: a reset as well */
 
     /* Alive, and nothing arrives but replies. */
@@ -477,16 +501,15 @@ static void test_dropped(const struct emu *e)
     CHECK_EQ(others, 0);
 
     /* Those closes had no 07h: FAST STOP; acknowledge it. */
-    CHECK(emu_wait_flags(&n, WSG_SF_FAST_STOP, WSG_SF_FAST_STOP, 1000,
-                         NULL) == 0);
-    CHECK_EQ(emu_request(&n, WSG_CMD_ACK_FAST_STOP, "ack", 3, NULL,
-                         EMU_REPLY_MS),
-             WSG_E_SUCCESS);
+    CHECK(emu_wait_flags(&n, WSG_SF_FAST_STOP, WSG_SF_FAST_STOP, 1000, NULL) ==
+          0);
+    CHECK_EQ(
+        emu_request(&n, WSG_CMD_ACK_FAST_STOP, "ack", 3, NULL, EMU_REPLY_MS),
+        WSG_E_SUCCESS);
     CHECK_EQ(n.bad + n2.bad, 0);
     CHECK_EQ(emu_request(&n, WSG_CMD_DISCONNECT, NULL, 0, NULL, EMU_REPLY_MS),
              WSG_E_SUCCESS);
-    CHECK_EQ(emu_request(&n2, WSG_CMD_DISCONNECT, NULL, 0, NULL,
-                         EMU_REPLY_MS),
+    CHECK_EQ(emu_request(&n2, WSG_CMD_DISCONNECT, NULL, 0, NULL, EMU_REPLY_MS),
              WSG_E_SUCCESS);
     emu_close(&n);
     emu_close(&n2);
@@ -508,10 +531,10 @@ int main(int argc, char **argv)
              WSG_E_SUCCESS);
     emu_close(&a);
 
-    test_one_time(&e);
     test_period(&e);
     test_several(&e);
     test_change_only(&e);
+    test_one_time(&e); /* moves from 60 to 70 mm */
     test_dropped(&e);
     /* A crash would show here as a status other than 0. */
     CHECK_EQ(emu_stop(&e), 0);
