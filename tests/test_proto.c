@@ -91,7 +91,7 @@ struct events {
     enum wsg_parse_event ev[16];
     uint8_t id[16];
     uint16_t len[16];
-    uint8_t payload[16][WSG_PAYLOAD_MAX];
+    uint8_t payload[16][WSG_REPLY_PAYLOAD_MAX];
 };
 
 static void feed_chunked(struct wsg_parser *p, const uint8_t *in, size_t len,
@@ -234,6 +234,31 @@ static void test_parser_oversize(void)
     }
 }
 
+/* A host reading replies: the 256-byte Loop echo is a 258-byte payload. */
+static void test_parser_reply_max(void)
+{
+    uint8_t echo[WSG_PAYLOAD_MAX], frame[WSG_FRAME_MAX];
+    struct events e;
+    struct wsg_parser p;
+    size_t n;
+
+    memset(echo, 0xAA, sizeof echo); /* preamble bytes inside a payload */
+    n = wsg_frame_encode_reply(frame, sizeof frame, 0x06, 0, echo,
+                               sizeof echo);
+    REQUIRE(n == WSG_FRAME_MAX);
+    wsg_parser_init(&p, 1);
+    feed_chunked(&p, frame, n, 5, &e);
+    REQUIRE(e.n >= 1);
+    CHECK_EQ(e.ev[0], WSG_PARSE_OVERSIZE); /* too big for a request */
+    wsg_parser_init(&p, 1);
+    wsg_parser_set_max(&p, 0xFFFF); /* capped to the buffer */
+    CHECK_EQ(p.max, WSG_REPLY_PAYLOAD_MAX);
+    feed_chunked(&p, frame, n, 5, &e);
+    REQUIRE(e.n == 1);
+    CHECK_EQ(e.ev[0], WSG_PARSE_FRAME);
+    CHECK_EQ(e.len[0], WSG_REPLY_PAYLOAD_MAX);
+}
+
 static void test_status_names(void)
 {
     CHECK(strcmp(wsg_status_name(WSG_E_SUCCESS), "E_SUCCESS") == 0);
@@ -250,6 +275,7 @@ int main(void)
     test_parser_splits();
     test_parser_bad_crc();
     test_parser_oversize();
+    test_parser_reply_max();
     test_status_names();
     TEST_EXIT();
 }

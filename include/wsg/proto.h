@@ -132,7 +132,7 @@ enum wsg_parse_event {
     WSG_PARSE_NONE = 0, /* all input consumed, no event */
     WSG_PARSE_FRAME,    /* a complete frame with a good (or ignored) CRC */
     WSG_PARSE_BAD_CRC,  /* complete frame, wrong CRC: frame.id is valid */
-    WSG_PARSE_OVERSIZE  /* SIZE above WSG_PAYLOAD_MAX: frame.id is valid */
+    WSG_PARSE_OVERSIZE  /* SIZE above the parser's max: frame.id is valid */
 };
 
 struct wsg_parser {
@@ -140,13 +140,18 @@ struct wsg_parser {
     uint8_t check_crc; /* 0: received checksums are ignored (--no-crc) */
     uint8_t id;
     uint8_t size_lo;
+    uint16_t max; /* largest SIZE accepted */
     uint16_t size;
     uint16_t got; /* payload + CRC bytes received */
     uint16_t crc; /* running CRC over everything received */
-    uint8_t buf[WSG_PAYLOAD_MAX + WSG_CRC_LEN];
+    uint8_t buf[WSG_REPLY_PAYLOAD_MAX + WSG_CRC_LEN];
 };
 
+/* Accepts SIZE up to WSG_PAYLOAD_MAX, what any command takes. */
 void wsg_parser_init(struct wsg_parser *p, int check_crc);
+/* A host reading replies accepts up to WSG_REPLY_PAYLOAD_MAX (a 256-byte
+ * Loop echo plus its status); larger values are capped to that. */
+void wsg_parser_set_max(struct wsg_parser *p, uint16_t max);
 /* Consume bytes until an event or the end of the input. Returns the number
  * of bytes consumed; call again with the rest while it is less than len.
  * Bytes before a preamble are skipped. After BAD_CRC or OVERSIZE the parser

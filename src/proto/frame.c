@@ -4,7 +4,7 @@
  * The parser is a byte-driven state machine over caller-owned state, in the
  * manner of MAVLink's frame_char_buffer: input may arrive in any split, a
  * read may hold several frames or half of one. It hunts for three preamble
- * bytes, reads ID and SIZE, refuses a SIZE above WSG_PAYLOAD_MAX before
+ * bytes, reads ID and SIZE, refuses a SIZE above its maximum before
  * buffering anything, then collects payload and checksum. The CRC runs over
  * every byte of the frame including the received checksum and must end at 0
  * (chapter 1.1), so no byte is looked at twice.
@@ -107,6 +107,12 @@ void wsg_parser_init(struct wsg_parser *p, int check_crc)
     memset(p, 0, sizeof *p);
     p->state = WSG_PS_HUNT;
     p->check_crc = check_crc ? 1 : 0;
+    p->max = WSG_PAYLOAD_MAX;
+}
+
+void wsg_parser_set_max(struct wsg_parser *p, uint16_t max)
+{
+    p->max = max > WSG_REPLY_PAYLOAD_MAX ? WSG_REPLY_PAYLOAD_MAX : max;
 }
 
 static void wsg_parser_hunt(struct wsg_parser *p)
@@ -158,7 +164,7 @@ size_t wsg_parser_feed(struct wsg_parser *p, const uint8_t *data, size_t len,
             i++;
             p->size = (uint16_t)(p->size_lo | (b << 8));
             p->crc = wsg_crc_update(p->crc, &b, 1);
-            if (p->size > WSG_PAYLOAD_MAX) {
+            if (p->size > p->max) {
                 /* Refuse before buffering: nothing depends on SIZE. */
                 frame->id = p->id;
                 frame->len = 0;

@@ -546,6 +546,7 @@ int emu_open(struct emu_client *c, const struct emu *e,
     c->fd = -1;
     c->tp = tp;
     wsg_parser_init(&c->parser, 1); /* replies always carry a valid CRC */
+    wsg_parser_set_max(&c->parser, WSG_REPLY_PAYLOAD_MAX); /* Loop echo */
     if (!emu_field(e, tp->field, addr, sizeof(addr))) {
         fprintf(stderr, "emu: no %s= in the ready line \"%s\"\n", tp->field,
                 e->line);
