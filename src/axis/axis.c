@@ -254,6 +254,13 @@ static void wsg_axis_clamp(struct wsg_axis *ax, double f, double target,
     ax->event_flags |= dir < 0 ? WSG_SF_BLOCKED_MINUS : WSG_SF_BLOCKED_PLUS;
 }
 
+/* Blocked with the motor turned off: no force, the block is flagged. */
+static void wsg_axis_block_release(struct wsg_axis *ax, double dir)
+{
+    ax->force = 0.0;
+    ax->event_flags |= dir < 0 ? WSG_SF_BLOCKED_MINUS : WSG_SF_BLOCKED_PLUS;
+}
+
 /* The motion m blocked at the current width. */
 static void wsg_axis_blocked(struct wsg_axis *ax)
 {
@@ -272,13 +279,10 @@ static void wsg_axis_blocked(struct wsg_axis *ax)
         break;
     case WSG_MOTION_MOVE:
         ax->grasp_state = WSG_GS_IDLE;
-        if (m.move_flags & WSG_MOVE_STOP_ON_BLOCK) {
-            ax->force = 0.0;
-            ax->event_flags |=
-                dir < 0 ? WSG_SF_BLOCKED_MINUS : WSG_SF_BLOCKED_PLUS;
-        } else {
+        if (m.move_flags & WSG_MOVE_STOP_ON_BLOCK)
+            wsg_axis_block_release(ax, dir);
+        else
             wsg_axis_clamp(ax, f, m.target, m.speed, dir);
-        }
         wsg_axis_done(ax, &m, WSG_E_AXIS_BLOCKED);
         break;
     case WSG_MOTION_GRASP:
@@ -292,17 +296,13 @@ static void wsg_axis_blocked(struct wsg_axis *ax)
         } else { /* blocked before the part's window: not the part */
             ax->stats.no_part++;
             ax->grasp_state = WSG_GS_NO_PART;
-            ax->force = 0.0;
-            ax->event_flags |=
-                dir < 0 ? WSG_SF_BLOCKED_MINUS : WSG_SF_BLOCKED_PLUS;
+            wsg_axis_block_release(ax, dir);
             wsg_axis_done(ax, &m, WSG_E_CMD_FAILED);
         }
         break;
     case WSG_MOTION_RELEASE:
         ax->grasp_state = WSG_GS_IDLE;
-        ax->force = 0.0;
-        ax->event_flags |=
-            dir < 0 ? WSG_SF_BLOCKED_MINUS : WSG_SF_BLOCKED_PLUS;
+        wsg_axis_block_release(ax, dir);
         wsg_axis_done(ax, &m, WSG_E_AXIS_BLOCKED);
         break;
     case WSG_MOTION_SNAP:

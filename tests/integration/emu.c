@@ -803,3 +803,31 @@ size_t emu_grasp_payload(uint8_t *out, float width, float speed)
     wsg_put_f32(out + 4, speed);
     return 8;
 }
+
+int emu_motions_answer(struct emu_client *c, int status)
+{
+    uint8_t dir = 0, p[16], g[16];
+    size_t n = emu_move_payload(p, 0, 50.0f, 100.0f);
+    size_t gn = emu_grasp_payload(g, 50.0f, 100.0f);
+    const struct {
+        uint8_t id;
+        const uint8_t *payload;
+        size_t len;
+    } cmd[] = {{WSG_CMD_HOMING, &dir, 1},
+               {WSG_CMD_PREPOSITION, p, n},
+               {WSG_CMD_GRASP, g, gn},
+               {WSG_CMD_RELEASE, g, gn}};
+    int wrong = 0;
+    size_t i;
+
+    for (i = 0; i < sizeof cmd / sizeof cmd[0]; i++) {
+        int st = emu_request(c, cmd[i].id, cmd[i].payload, cmd[i].len, NULL,
+                             EMU_REPLY_MS);
+        if (st != status) {
+            fprintf(stderr, "emu: %02Xh answered %d, expected %d\n", cmd[i].id,
+                    st, status);
+            wrong++;
+        }
+    }
+    return wrong;
+}

@@ -171,6 +171,9 @@ int emu_wait_float(struct emu_client *c, uint8_t id, float lo, float hi,
  * it, else return the immediate status. -1 on timeout. */
 int emu_motion(struct emu_client *c, uint8_t id, const void *payload,
                size_t len, int timeout_ms, int *immediate);
+/* Send Homing, Preposition, Grasp and Release (valid parameters, one
+ * each) and count the immediate answers that are not status. */
+int emu_motions_answer(struct emu_client *c, int status);
 /* Payload of Preposition (21h) / Grasp (25h) / Release (26h). */
 size_t emu_move_payload(uint8_t *out, uint8_t flags, float width, float speed);
 size_t emu_grasp_payload(uint8_t *out, float width, float speed);

@@ -77,18 +77,8 @@ static float start_slow_move(struct emu_client *c, struct emu_client *mon,
  * has no final result. */
 static void check_motion_denied(struct emu_client *m)
 {
-    uint8_t dir = 0, p[16], g[16];
-    size_t n = emu_move_payload(p, 0, 50.0f, 100.0f);
-    size_t gn = emu_grasp_payload(g, 50.0f, 100.0f);
     unsigned s20 = m->seen[WSG_CMD_HOMING], s21 = m->seen[WSG_CMD_PREPOSITION];
-    CHECK_EQ(emu_request(m, WSG_CMD_HOMING, &dir, 1, NULL, EMU_REPLY_MS),
-             WSG_E_ACCESS_DENIED);
-    CHECK_EQ(emu_request(m, WSG_CMD_PREPOSITION, p, n, NULL, EMU_REPLY_MS),
-             WSG_E_ACCESS_DENIED);
-    CHECK_EQ(emu_request(m, WSG_CMD_GRASP, g, gn, NULL, EMU_REPLY_MS),
-             WSG_E_ACCESS_DENIED);
-    CHECK_EQ(emu_request(m, WSG_CMD_RELEASE, g, gn, NULL, EMU_REPLY_MS),
-             WSG_E_ACCESS_DENIED);
+    CHECK_EQ(emu_motions_answer(m, WSG_E_ACCESS_DENIED), 0);
     CHECK_EQ(flags_of(m) & WSG_SF_MOVING, 0);
     REQUIRE(emu_sync(m, EMU_REPLY_MS) == 0);
     CHECK_EQ(m->seen[WSG_CMD_HOMING] - s20, 1);
