@@ -87,6 +87,11 @@ void wsg_device_session_closed(struct wsg_device *d, struct wsg_session *s);
  * dispatched and answered through s->send. */
 void wsg_device_input(struct wsg_device *d, struct wsg_session *s,
                       struct wsg_parser *p, const uint8_t *data, size_t len);
+/* Feed one datagram (UDP): each packet in it is answered; a packet cut
+ * off at its end is answered E_CMD_FORMAT_ERROR under its ID (dropped if
+ * even the ID is missing) and never joined with the next datagram. */
+void wsg_device_input_datagram(struct wsg_device *d, struct wsg_session *s,
+                               int check_crc, const uint8_t *data, size_t len);
 /* Dispatch one parsed frame (the table's length and state checks, then the
  * handler) and send its reply. */
 void wsg_device_dispatch(struct wsg_device *d, struct wsg_session *s,

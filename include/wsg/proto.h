@@ -152,6 +152,9 @@ void wsg_parser_init(struct wsg_parser *p, int check_crc);
 /* A host reading replies accepts up to WSG_REPLY_PAYLOAD_MAX (a 256-byte
  * Loop echo plus its status); larger values are capped to that. */
 void wsg_parser_set_max(struct wsg_parser *p, uint16_t max);
+/* Inside a frame (its preamble seen, its end not yet): 1, with the ID in
+ * *id once it has arrived (else *id is left alone and 2 is returned). */
+int wsg_parser_partial(const struct wsg_parser *p, uint8_t *id);
 /* Consume bytes until an event or the end of the input. Returns the number
  * of bytes consumed; call again with the rest while it is less than len.
  * Bytes before a preamble are skipped. After BAD_CRC or OVERSIZE the parser

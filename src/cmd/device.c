@@ -112,6 +112,18 @@ void wsg_device_input(struct wsg_device *d, struct wsg_session *s,
     }
 }
 
+void wsg_device_input_datagram(struct wsg_device *d, struct wsg_session *s,
+                               int check_crc, const uint8_t *data, size_t len)
+{
+    struct wsg_parser p;
+    uint8_t id;
+
+    wsg_parser_init(&p, check_crc);
+    wsg_device_input(d, s, &p, data, len);
+    if (wsg_parser_partial(&p, &id) == 1)
+        wsg_device_reply(d, s, id, WSG_E_CMD_FORMAT_ERROR, NULL, 0);
+}
+
 size_t wsg_stream_value(const struct wsg_device *d, enum wsg_stream_id sid,
                         uint8_t *out, float *value)
 {

@@ -10,10 +10,14 @@
 
 #include "wsg/axis.h"
 
-#define WSG_STEP_US_DEFAULT  1000u
-#define WSG_STEP_US_MIN      100u
-#define WSG_STEP_US_MAX      100000u
-#define WSG_TCP_PORT_DEFAULT 1000u
+#define WSG_STEP_US_DEFAULT    1000u
+#define WSG_STEP_US_MIN        100u
+#define WSG_STEP_US_MAX        100000u
+#define WSG_TCP_PORT_DEFAULT   1000u
+#define WSG_UDP_PORT_DEFAULT   1500u
+#define WSG_UDP_REMOTE_DEFAULT 1501u
+#define WSG_CAN_ID_DEFAULT     0x000u
+#define WSG_CAN_ID_MAX         0x7FEu /* answers go on ID + 1, an 11-bit ID too */
 
 /* An IPv4 endpoint as given on the command line. */
 struct wsg_endpoint {
@@ -22,8 +26,16 @@ struct wsg_endpoint {
 };
 
 struct wsg_options {
+    /* Interfaces. With none given on the command line: TCP and UDP on
+     * their defaults, like a gripper fresh from the factory. */
     int tcp_enabled;
     struct wsg_endpoint tcp;
+    int udp_enabled;
+    struct wsg_endpoint udp;  /* where the emulator listens */
+    uint16_t udp_remote_port; /* where replies go, at the sender's IP */
+    const char *pty_path;     /* NULL: no serial port */
+    const char *can_iface;    /* NULL: no CAN */
+    uint16_t can_id;          /* commands on can_id, answers on can_id+1 */
     int check_crc;            /* 0 with --no-crc */
     int disconnect_fast_stop; /* 0 with --no-disconnect-fast-stop */
     uint32_t step_us;

@@ -115,6 +115,14 @@ void wsg_parser_set_max(struct wsg_parser *p, uint16_t max)
     p->max = max > WSG_REPLY_PAYLOAD_MAX ? WSG_REPLY_PAYLOAD_MAX : max;
 }
 
+int wsg_parser_partial(const struct wsg_parser *p, uint8_t *id)
+{
+    if (p->state == WSG_PS_HUNT || p->state == WSG_PS_ID)
+        return p->state == WSG_PS_ID ? 2 : 0;
+    *id = p->id;
+    return 1;
+}
+
 static void wsg_parser_hunt(struct wsg_parser *p)
 {
     p->state = WSG_PS_HUNT;
