@@ -66,6 +66,11 @@ int wsg_daemon_open(struct wsg_daemon *d)
         if (r < 0)
             return r;
     }
+    if (d->opt.udp_enabled) {
+        r = open_transport(d, &wsg_udp_ops);
+        if (r < 0)
+            return r;
+    }
     wsg_loop_set_transports(&d->loop, d->transports, d->ntransports);
     return 0;
 }

@@ -198,9 +198,57 @@ static int reap(pid_t pid, int timeout_ms)
     }
 }
 
+static int start(struct emu *e, const char *exe, const char *const *args);
+
 int emu_start(struct emu *e, const char *exe, const char *const *args)
 {
     memset(e, 0, sizeof(*e));
+    e->tp_fd = -1;
+    return start(e, exe, args);
+}
+
+int emu_start_tp(struct emu *e, const char *exe,
+                 const struct emu_transport *tp, const char *const *extra)
+{
+    const char *args[32];
+    size_t n = 0;
+    int r;
+
+    memset(e, 0, sizeof(*e));
+    e->tp_fd = -1;
+    if (tp->daemon_args) {
+        r = tp->daemon_args(e);
+        if (r == 77)
+            exit(77);
+        if (r != 0)
+            return -1;
+    } else {
+        snprintf(e->tp_arg[0], sizeof e->tp_arg[0], "--%s", tp->field);
+        e->tp_argv[0] = e->tp_arg[0];
+        e->tp_argv[1] = "127.0.0.1:0";
+    }
+    for (r = 0; e->tp_argv[r] && n < 16; r++)
+        args[n++] = e->tp_argv[r];
+    for (r = 0; extra && extra[r] && n < 31; r++)
+        args[n++] = extra[r];
+    args[n] = NULL;
+    return start(e, exe, args);
+}
+
+const struct emu_transport *emu_transport_arg(int argc, char **argv)
+{
+    const char *name = argc > 2 ? argv[2] : "tcp";
+    int i;
+
+    for (i = 0; emu_transports[i]; i++)
+        if (strcmp(emu_transports[i]->field, name) == 0)
+            return emu_transports[i];
+    fprintf(stderr, "emu: unknown transport \"%s\"\n", name);
+    exit(2);
+}
+
+static int start(struct emu *e, const char *exe, const char *const *args)
+{
     e->out_fd = -1;
     e->pid = spawn(exe, args, &e->out_fd, NULL);
     if (e->pid < 0) {
@@ -277,6 +325,10 @@ static void drain_stdout(struct emu *e, double deadline)
 
 int emu_stop_sig(struct emu *e, int sig)
 {
+    if (e->tp_fd >= 0) {
+        close(e->tp_fd);
+        e->tp_fd = -1;
+    }
     if (e->pid <= 0)
         return -1;
     kill(e->pid, sig);
@@ -531,20 +583,29 @@ static void tcp_close(struct emu_client *c, int abort)
     close(c->fd);
 }
 
-const struct emu_transport emu_tcp = {"tcp", tcp_open, tcp_send, tcp_recv,
-                                      tcp_close};
+const struct emu_transport emu_tcp = {
+    .field = "tcp",
+    .open = tcp_open,
+    .send = tcp_send,
+    .recv = tcp_recv,
+    .close = tcp_close,
+    .connection = 1,
+};
 
-const struct emu_transport *const emu_transports[] = {&emu_tcp, NULL};
+const struct emu_transport *const emu_transports[] = {&emu_tcp, &emu_udp,
+                                                      &emu_can, NULL};
 
 /* ---- clients ---- */
 
-int emu_open(struct emu_client *c, const struct emu *e,
+int emu_open(struct emu_client *c, struct emu *e,
              const struct emu_transport *tp)
 {
     char addr[256];
     memset(c, 0, sizeof(*c));
     c->fd = -1;
+    c->fd2 = -1;
     c->tp = tp;
+    c->emu = e;
     wsg_parser_init(&c->parser, 1); /* replies always carry a valid CRC */
     wsg_parser_set_max(&c->parser, WSG_REPLY_PAYLOAD_MAX); /* Loop echo */
     if (!emu_field(e, tp->field, addr, sizeof(addr))) {

@@ -32,10 +32,19 @@
 
 /* ---- the daemon process ---- */
 
+struct emu_transport;
+
 struct emu {
     pid_t pid;
-    int out_fd;      /* read end of the daemon's stdout */
-    char line[1024]; /* the ready line, without its newline */
+    /* What a transport's daemon_args hook prepared: the arguments naming
+     * the interface, and anything it reserved for its clients. */
+    const char *tp_argv[8]; /* NULL-terminated */
+    char tp_arg[4][160];
+    int tp_fd;           /* -1 when unused */
+    uint16_t tp_port;    /* e.g. UDP: where replies come back */
+    unsigned tp_clients; /* clients opened so far */
+    int out_fd;          /* read end of the daemon's stdout */
+    char line[1024];     /* the ready line, without its newline */
     /* stdout after the ready line: what arrived with it, and at stop */
     char extra[1024];
     size_t extra_len;
@@ -46,6 +55,13 @@ struct emu {
  * wait up to EMU_READY_MS for the ready line. Returns 0, or -1 with a
  * message on stderr (the child is then reaped). */
 int emu_start(struct emu *e, const char *exe, const char *const *args);
+/* Start with the interface of tp (its daemon_args) followed by extra
+ * (NULL-terminated, may be NULL). Exits 77 when tp cannot run here. */
+int emu_start_tp(struct emu *e, const char *exe,
+                 const struct emu_transport *tp, const char *const *extra);
+/* The transport named by argv[2] ("tcp" when absent); exits 2 for an
+ * unknown name. */
+const struct emu_transport *emu_transport_arg(int argc, char **argv);
 /* Send sig, wait up to 3 s for the exit and collect the rest of stdout into
  * e->extra. Returns the exit status, 128+N if killed by signal N, or -1 if
  * it did not exit in time (it is then killed). */
@@ -96,9 +112,21 @@ struct emu_transport {
                  int timeout_ms);
     /* abort: go away without an orderly shutdown (TCP: reset). */
     void (*close)(struct emu_client *c, int abort);
+    /* Fill e->tp_argv with the options that start the daemon with this
+     * interface on a free address. 0, or 77 when it cannot run here (the
+     * reason printed), or -1. NULL: {"--FIELD", "127.0.0.1:0"}. */
+    int (*daemon_args)(struct emu *e);
+    /* Connection-oriented (TCP): 07h is available and a close without it
+     * means FAST STOP. Otherwise 07h answers E_NOT_AVAILABLE. */
+    int connection;
+    /* One peer only (a serial line, a CAN bus): clients cannot be told
+     * apart, so tests with several clients do not apply. */
+    int single_peer;
 };
 
 extern const struct emu_transport emu_tcp;
+extern const struct emu_transport emu_udp;
+extern const struct emu_transport emu_can; /* emu_can.c */
 /* Every transport this library knows, NULL-terminated. */
 extern const struct emu_transport *const emu_transports[];
 
@@ -108,7 +136,10 @@ extern const struct emu_transport *const emu_transports[];
 
 struct emu_client {
     const struct emu_transport *tp;
+    struct emu *emu; /* the daemon it talks to */
     int fd;
+    int fd2; /* a second socket where the transport needs one, else -1 */
+    uint32_t tp_id; /* the transport's own: CAN command identifier */
     int eof;
     struct wsg_parser parser;
     uint8_t in[4096];
@@ -122,7 +153,7 @@ struct emu_client {
 
 /* Connect over tp to the address the ready line gives. -1 (and a message)
  * if the field is absent or the connection fails. */
-int emu_open(struct emu_client *c, const struct emu *e,
+int emu_open(struct emu_client *c, struct emu *e,
              const struct emu_transport *tp);
 void emu_close(struct emu_client *c);
 void emu_abort(struct emu_client *c);

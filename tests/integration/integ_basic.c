@@ -23,6 +23,10 @@
 
 static const char *const tcp_args[] = {"--tcp", "127.0.0.1:0", NULL};
 
+/* The interface under test (argv[2]): every check that is not about TCP
+ * or the command line runs over each of them. */
+static const struct emu_transport *tp;
+
 /* The ready line: "ready" and space-separated name=value fields, names of
  * lower-case letters, values non-empty, no name twice. */
 static int ready_line_ok(const char *line)
@@ -124,7 +128,7 @@ static void single_recv(struct emu_client *c, uint8_t id, const uint8_t *p,
     CHECK_EQ(f.id, id);
 }
 
-static void test_single_recv(const struct emu *e)
+static void test_single_recv(struct emu *e)
 {
     struct emu_client c;
     uint8_t p[256];
@@ -132,7 +136,7 @@ static void test_single_recv(const struct emu *e)
 
     for (size_t i = 0; i < sizeof(p); i++)
         p[i] = (uint8_t)(i * 7 + 3);
-    REQUIRE(emu_open(&c, e, &emu_tcp) == 0);
+    REQUIRE(emu_open(&c, e, tp) == 0);
     /* Repeated, since a daemon writing in pieces is caught only when the
      * pieces happen to be read apart. */
     for (int round = 0; round < 20; round++) {
@@ -145,7 +149,7 @@ static void test_single_recv(const struct emu *e)
         single_recv(&c, 0x90, NULL, 0, 0);
     }
     CHECK_EQ(emu_request(&c, WSG_CMD_DISCONNECT, NULL, 0, NULL, EMU_REPLY_MS),
-             WSG_E_SUCCESS);
+             tp->connection ? WSG_E_SUCCESS : WSG_E_NOT_AVAILABLE);
     emu_close(&c);
 }
 
@@ -171,7 +175,7 @@ static void loop_raw(struct emu_client *c, const uint8_t *p, size_t len)
     CHECK(memcmp(EMU_PARAMS(&f), p, len) == 0);
 }
 
-static void test_loop(const struct emu *e, const struct emu_transport *tp)
+static void test_loop(struct emu *e)
 {
     struct emu_client c;
     struct emu_frame f;
@@ -181,7 +185,6 @@ static void test_loop(const struct emu *e, const struct emu_transport *tp)
     static const uint8_t tricky[] = {0xAA, 0xAA, 0xAA, 0x06, 0x02, 0x00,
                                      0xAA, 0xAA, 0xAA, 0xAA, 0x00, 0x00};
 
-    printf("loop over %s\n", tp->field);
     REQUIRE(emu_open(&c, e, tp) == 0);
     for (size_t i = 0; i < sizeof(p); i++)
         p[i] = (uint8_t)(255 - i);
@@ -224,13 +227,13 @@ static void test_loop(const struct emu *e, const struct emu_transport *tp)
 }
 
 /* Send raw bytes, expect exactly the bytes want in reply. */
-static void exact_reply(const struct emu *e, const uint8_t *req, size_t rlen,
+static void exact_reply(struct emu *e, const uint8_t *req, size_t rlen,
                         const uint8_t *want, size_t wlen)
 {
     struct emu_client c;
     uint8_t buf[512];
     size_t got = 0;
-    REQUIRE(emu_open(&c, e, &emu_tcp) == 0);
+    REQUIRE(emu_open(&c, e, tp) == 0);
     REQUIRE(emu_send_raw(&c, req, rlen) == 0);
     while (got < wlen) {
         long n = emu_recv_raw(&c, buf + got, sizeof(buf) - got, EMU_REPLY_MS);
@@ -254,7 +257,7 @@ static void exact_reply(const struct emu *e, const uint8_t *req, size_t rlen,
     emu_close(&c);
 }
 
-static void test_unknown_id(const struct emu *e)
+static void test_unknown_id(struct emu *e)
 {
     /* Chapter 1.2, example 2, to the byte. */
     static const uint8_t want[] = {0xAA, 0xAA, 0xAA, 0x90, 0x02,
@@ -269,14 +272,14 @@ static void test_unknown_id(const struct emu *e)
     exact_reply(e, req, n, want, sizeof(want));
 }
 
-static void test_checksum(const struct emu *e)
+static void test_checksum(struct emu *e)
 {
     struct emu_client c;
     struct emu_frame f;
     uint8_t pkt[64];
     size_t n;
 
-    REQUIRE(emu_open(&c, e, &emu_tcp) == 0);
+    REQUIRE(emu_open(&c, e, tp) == 0);
     /* The manual's own example packets (1.1) carry valid checksums: ID 01h
      * is no command, so E_CMD_UNKNOWN, not E_CHECKSUM_ERROR. */
     static const uint8_t ex1[] = {0xAA, 0xAA, 0xAA, 0x01,
@@ -327,25 +330,22 @@ static void test_checksum(const struct emu *e)
 
 static void test_no_crc(const char *exe)
 {
-    static const char *const args[] = {"--tcp", "127.0.0.1:0", "--no-crc",
-                                       NULL};
+    static const char *const args[] = {"--no-crc", NULL};
     struct emu e;
     struct emu_client c;
     struct emu_frame f;
-    uint8_t pkt[64], buf[64];
+    uint8_t pkt[64];
     size_t n;
 
-    REQUIRE(emu_start(&e, exe, args) == 0);
-    REQUIRE(emu_open(&c, &e, &emu_tcp) == 0);
+    REQUIRE(emu_start_tp(&e, exe, tp, args) == 0);
+    REQUIRE(emu_open(&c, &e, tp) == 0);
     /* Checksum 00 00 (the manual's "these bytes are 0"): accepted, and the
      * reply still carries a valid checksum (decode checks it). */
     n = wsg_frame_encode(pkt, sizeof(pkt), WSG_CMD_LOOP,
                          (const uint8_t *)"nocrc", 5);
     pkt[n - 2] = pkt[n - 1] = 0x00;
     REQUIRE(emu_send_raw(&c, pkt, n) == 0);
-    long got = emu_recv_raw(&c, buf, sizeof(buf), EMU_REPLY_MS);
-    CHECK_EQ(got, WSG_HEADER_LEN + 2 + 5 + WSG_CRC_LEN);
-    CHECK(got > 0 && emu_packet_decode(buf, (size_t)got, &f) == 0);
+    CHECK_EQ(emu_recv_id(&c, WSG_CMD_LOOP, &f, EMU_REPLY_MS), 1);
     CHECK_EQ(f.status, WSG_E_SUCCESS);
     CHECK(f.len == 7 && memcmp(EMU_PARAMS(&f), "nocrc", 5) == 0);
 
@@ -353,13 +353,11 @@ static void test_no_crc(const char *exe)
     n = wsg_frame_encode(pkt, sizeof(pkt), WSG_CMD_GET_SYSTEM_STATE, NULL, 0);
     pkt[n - 2] = pkt[n - 1] = 0xFF;
     REQUIRE(emu_send_raw(&c, pkt, n) == 0);
-    got = emu_recv_raw(&c, buf, sizeof(buf), EMU_REPLY_MS);
-    CHECK_EQ(got, WSG_HEADER_LEN + 2 + 4 + WSG_CRC_LEN);
-    CHECK(got > 0 && emu_packet_decode(buf, (size_t)got, &f) == 0);
-    CHECK_EQ(f.id, WSG_CMD_GET_SYSTEM_STATE);
+    CHECK_EQ(emu_recv_id(&c, WSG_CMD_GET_SYSTEM_STATE, &f, EMU_REPLY_MS), 1);
+    CHECK_EQ(f.len, 2 + 4);
     CHECK_EQ(f.status, WSG_E_SUCCESS);
 
-    /* A valid checksum is fine too. */
+    /* A valid checksum is fine too; every reply had a valid one. */
     CHECK_EQ(emu_request(&c, WSG_CMD_LOOP, "v", 1, &f, EMU_REPLY_MS),
              WSG_E_SUCCESS);
     CHECK_EQ(c.bad, 0);
@@ -470,12 +468,12 @@ static int proc_activity(pid_t pid, long *switches, long *ticks)
  * quiet) must not spin nor wake for model steps: over a second it is
  * scheduled a handful of times at most (a 1 ms step timer would make it
  * about 1000) and uses no CPU time worth a tick. */
-static void test_idle(const struct emu *e)
+static void test_idle(struct emu *e)
 {
     struct emu_client c;
     long sw0, sw1, t0, t1;
 
-    REQUIRE(emu_open(&c, e, &emu_tcp) == 0);
+    REQUIRE(emu_open(&c, e, tp) == 0);
     CHECK_EQ(emu_request(&c, WSG_CMD_GET_WIDTH, NULL, 0, NULL, EMU_REPLY_MS),
              WSG_E_SUCCESS);
     emu_sleep_ms(100);
@@ -492,23 +490,25 @@ int main(int argc, char **argv)
     const char *exe = emu_exe(argc, argv);
     struct emu e;
 
-    test_ready_line(exe);
-    test_bad_options(exe);
-    test_good_options(exe);
-
-    REQUIRE(emu_start(&e, exe, tcp_args) == 0);
-    test_single_recv(&e);
-    for (int i = 0; emu_transports[i]; i++) {
-        char v[256];
-        if (emu_field(&e, emu_transports[i]->field, v, sizeof(v)))
-            test_loop(&e, emu_transports[i]);
+    tp = emu_transport_arg(argc, argv);
+    printf("over %s\n", tp->field);
+    if (tp == &emu_tcp) { /* the command line and the process, once */
+        test_ready_line(exe);
+        test_bad_options(exe);
+        test_good_options(exe);
+        test_signals(exe);
     }
+
+    REQUIRE(emu_start_tp(&e, exe, tp, NULL) == 0);
+    /* A reply in one recv(): what drivers on TCP and UDP rely on. A serial
+     * line and a CAN bus deliver bytes and frames, not packets. */
+    if (tp == &emu_tcp || tp == &emu_udp)
+        test_single_recv(&e);
+    test_loop(&e);
     test_unknown_id(&e);
     test_checksum(&e);
     test_idle(&e);
     CHECK_EQ(emu_stop(&e), 0);
-
     test_no_crc(exe);
-    test_signals(exe);
     TEST_EXIT();
 }

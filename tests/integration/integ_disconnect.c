@@ -27,6 +27,11 @@
 
 static const char *const ack = "ack";
 
+/* The interface under test (argv[2]). TCP has connections and the FAST
+ * STOP rule of their end; elsewhere 07h is not available and a client that
+ * goes away changes nothing. */
+static const struct emu_transport *tp;
+
 static uint32_t flags_of(struct emu_client *c)
 {
     uint32_t fl = 0;
@@ -105,14 +110,13 @@ static void acknowledge(struct emu_client *m)
 }
 
 /* Returns the longest delay from a close to FAST STOP seen, in ms. */
-static double test_close_without_announce(const struct emu *e,
-                                          struct emu_client *m)
+static double test_close_without_announce(struct emu *e, struct emu_client *m)
 {
     struct emu_client a;
     double t0, worst = 0;
 
     /* 1. Closed (FIN) while moving: FAST STOP, and the motion stops. */
-    REQUIRE(emu_open(&a, e, &emu_tcp) == 0);
+    REQUIRE(emu_open(&a, e, tp) == 0);
     float from = start_slow_move(&a, m, 20.0f);
     unsigned m21 = m->seen[WSG_CMD_PREPOSITION];
     t0 = emu_now_ms();
@@ -130,7 +134,7 @@ static double test_close_without_announce(const struct emu *e,
     acknowledge(m);
 
     /* 2. Reset with unread data in flight (a crashed client). */
-    REQUIRE(emu_open(&a, e, &emu_tcp) == 0);
+    REQUIRE(emu_open(&a, e, tp) == 0);
     CHECK_EQ(emu_request(&a, WSG_CMD_LOOP, "rst", 3, NULL, EMU_REPLY_MS),
              WSG_E_SUCCESS);
     REQUIRE(emu_send(&a, WSG_CMD_GET_SYSTEM_STATE, NULL, 0) == 0);
@@ -144,7 +148,7 @@ static double test_close_without_announce(const struct emu *e,
     acknowledge(m);
 
     /* 3. A connection that never sent anything: also no 07h. */
-    REQUIRE(emu_open(&a, e, &emu_tcp) == 0);
+    REQUIRE(emu_open(&a, e, tp) == 0);
     t0 = emu_now_ms();
     emu_close(&a);
     CHECK(fast_stop_within(m, 2000));
@@ -160,15 +164,14 @@ static double test_close_without_announce(const struct emu *e,
     return worst;
 }
 
-static void test_announce(const struct emu *e, struct emu_client *m,
-                          int window)
+static void test_announce(struct emu *e, struct emu_client *m, int window)
 {
     struct emu_client a;
     struct emu_frame f;
     uint8_t dir = 0;
 
     /* 07h takes no parameter (3.1.2). */
-    REQUIRE(emu_open(&a, e, &emu_tcp) == 0);
+    REQUIRE(emu_open(&a, e, tp) == 0);
     CHECK_EQ(emu_request(&a, WSG_CMD_DISCONNECT, "x", 1, NULL, EMU_REPLY_MS),
              WSG_E_NO_PARAM_EXPECTED);
     CHECK_EQ(emu_request(&a, WSG_CMD_DISCONNECT, NULL, 0, &f, EMU_REPLY_MS),
@@ -196,7 +199,7 @@ static void test_announce(const struct emu *e, struct emu_client *m,
     CHECK(!fast_stop_within(m, window));
 
     /* 07h aborts a running motion at once, without FAST STOP. */
-    REQUIRE(emu_open(&a, e, &emu_tcp) == 0);
+    REQUIRE(emu_open(&a, e, tp) == 0);
     float from = start_slow_move(&a, m, 40.0f);
     double t0 = emu_now_ms();
     CHECK_EQ(emu_request(&a, WSG_CMD_DISCONNECT, NULL, 0, NULL, EMU_REPLY_MS),
@@ -218,23 +221,22 @@ static void test_announce(const struct emu *e, struct emu_client *m,
 
 static void test_no_disconnect_fast_stop(const char *exe, int window)
 {
-    static const char *const args[] = {"--tcp", "127.0.0.1:0",
-                                       "--no-disconnect-fast-stop", NULL};
+    static const char *const args[] = {"--no-disconnect-fast-stop", NULL};
     struct emu e;
     struct emu_client m, a;
 
-    REQUIRE(emu_start(&e, exe, args) == 0);
-    REQUIRE(emu_open(&m, &e, &emu_tcp) == 0);
+    REQUIRE(emu_start_tp(&e, exe, tp, args) == 0);
+    REQUIRE(emu_open(&m, &e, tp) == 0);
 
-    REQUIRE(emu_open(&a, &e, &emu_tcp) == 0);
+    REQUIRE(emu_open(&a, &e, tp) == 0);
     CHECK_EQ(emu_request(&a, WSG_CMD_LOOP, "fin", 3, NULL, EMU_REPLY_MS),
              WSG_E_SUCCESS);
     emu_close(&a);
-    REQUIRE(emu_open(&a, &e, &emu_tcp) == 0);
+    REQUIRE(emu_open(&a, &e, tp) == 0);
     CHECK_EQ(emu_request(&a, WSG_CMD_LOOP, "rst", 3, NULL, EMU_REPLY_MS),
              WSG_E_SUCCESS);
     emu_abort(&a);
-    REQUIRE(emu_open(&a, &e, &emu_tcp) == 0);
+    REQUIRE(emu_open(&a, &e, tp) == 0);
     emu_close(&a);
     CHECK(!fast_stop_within(&m, window));
 
@@ -255,18 +257,54 @@ static void test_no_disconnect_fast_stop(const char *exe, int window)
     CHECK_EQ(emu_stop(&e), 0);
 }
 
+/* Without connections: 07h is E_NOT_AVAILABLE and refuses nothing after
+ * it; a client that goes away in the middle of a motion changes nothing:
+ * no FAST STOP, the motion runs to its end. */
+static void test_connectionless(struct emu *e)
+{
+    struct emu_client a;
+    uint32_t fl = 0;
+
+    REQUIRE(emu_open(&a, e, tp) == 0);
+    CHECK_EQ(emu_request(&a, WSG_CMD_DISCONNECT, "x", 1, NULL, EMU_REPLY_MS),
+             WSG_E_NO_PARAM_EXPECTED);
+    CHECK_EQ(emu_request(&a, WSG_CMD_DISCONNECT, NULL, 0, NULL, EMU_REPLY_MS),
+             WSG_E_NOT_AVAILABLE);
+    CHECK_EQ(emu_request(&a, WSG_CMD_LOOP, "z", 1, NULL, EMU_REPLY_MS),
+             WSG_E_SUCCESS);
+    start_slow_move(&a, &a, 60.0f);
+    emu_close(&a);
+    emu_sleep_ms(200);
+    REQUIRE(emu_open(&a, e, tp) == 0);
+    CHECK(emu_get_flags(&a, &fl) == 0);
+    CHECK_EQ(fl & WSG_SF_FAST_STOP, 0);
+    CHECK(fl & WSG_SF_MOVING);
+    CHECK(emu_wait_flags(&a, WSG_SF_MOVING, 0, MOVE_MS, &fl) == 0);
+    CHECK(fl & WSG_SF_TARGET_POS_REACHED);
+    CHECK_NEAR(width_of(&a), 60.0, 0.1);
+    CHECK_EQ(a.bad, 0);
+    emu_close(&a);
+}
+
 int main(int argc, char **argv)
 {
-    static const char *const args[] = {"--tcp", "127.0.0.1:0", NULL};
     const char *exe = emu_exe(argc, argv);
     struct emu e;
     struct emu_client m;
 
-    REQUIRE(emu_start(&e, exe, args) == 0);
-    REQUIRE(emu_open(&m, &e, &emu_tcp) == 0);
+    tp = emu_transport_arg(argc, argv);
+    printf("over %s\n", tp->field);
+    REQUIRE(emu_start_tp(&e, exe, tp, NULL) == 0);
+    REQUIRE(emu_open(&m, &e, tp) == 0);
     uint8_t dir = 0;
     REQUIRE(emu_motion(&m, WSG_CMD_HOMING, &dir, 1, HOMING_MS, NULL) ==
             WSG_E_SUCCESS);
+    if (!tp->connection) {
+        emu_close(&m);
+        test_connectionless(&e);
+        CHECK_EQ(emu_stop(&e), 0);
+        TEST_EXIT();
+    }
 
     double worst = test_close_without_announce(&e, &m);
     /* Watch for "no FAST STOP" several times as long as one took to show,

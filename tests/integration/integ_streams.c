@@ -32,6 +32,9 @@ static const uint8_t stream_ids[] = {
     WSG_CMD_GET_SPEED, WSG_CMD_GET_FORCE};
 #define NSTREAMS (sizeof(stream_ids) / sizeof(stream_ids[0]))
 
+/* The interface under test (argv[2]). */
+static const struct emu_transport *tp;
+
 /* Payload length of a successful reply of a stream command. */
 static unsigned value_len(uint8_t id)
 {
@@ -112,14 +115,32 @@ static int count_ok(double got, double expected)
     return got >= expected * 0.7 && got <= expected * 1.3;
 }
 
-static void test_period(const struct emu *e)
+/* The end of a client: on TCP 07h and a close, and its streams go with
+ * the connection. On a serial line, a bus or from a UDP address the streams
+ * would outlive the client: they are ended with FLAGS 0, and 07h is
+ * E_NOT_AVAILABLE there. */
+static void goodbye(struct emu_client *c)
+{
+    static const uint8_t off[3] = {0, 0, 0};
+    unsigned i;
+
+    if (!tp->connection)
+        for (i = 0; i < NSTREAMS; i++)
+            CHECK_EQ(emu_request(c, stream_ids[i], off, 3, NULL, EMU_REPLY_MS),
+                     WSG_E_SUCCESS);
+    CHECK_EQ(emu_request(c, WSG_CMD_DISCONNECT, NULL, 0, NULL, EMU_REPLY_MS),
+             tp->connection ? WSG_E_SUCCESS : WSG_E_NOT_AVAILABLE);
+    emu_close(c);
+}
+
+static void test_period(struct emu *e)
 {
     struct emu_client s;
     struct emu_frame f;
     double t[200], iv[200];
     unsigned n = 0;
 
-    REQUIRE(emu_open(&s, e, &emu_tcp) == 0);
+    REQUIRE(emu_open(&s, e, tp) == 0);
     double t0 = emu_now_ms();
     REQUIRE(subscribe(&s, WSG_CMD_GET_WIDTH, 0x01, 20, &f) == WSG_E_SUCCESS);
     printf("43h subscription answered after %.1f ms\n", emu_now_ms() - t0);
@@ -161,12 +182,10 @@ static void test_period(const struct emu *e)
     CHECK(unsubscribe(&s, WSG_CMD_GET_WIDTH) >= 1);
     CHECK_EQ(count_for(&s, WSG_CMD_GET_WIDTH, EMU_QUIET_MS, NULL), 0);
     CHECK_EQ(s.bad, 0);
-    CHECK_EQ(emu_request(&s, WSG_CMD_DISCONNECT, NULL, 0, NULL, EMU_REPLY_MS),
-             WSG_E_SUCCESS);
-    emu_close(&s);
+    goodbye(&s);
 }
 
-static void test_change_only(const struct emu *e)
+static void test_change_only(struct emu *e)
 {
     struct emu_client s;
     struct emu_frame f;
@@ -177,7 +196,7 @@ static void test_change_only(const struct emu *e)
     int last_gs = -1, saw_positioning = 0;
     enum { PERIOD = 20 };
 
-    REQUIRE(emu_open(&s, e, &emu_tcp) == 0);
+    REQUIRE(emu_open(&s, e, tp) == 0);
     REQUIRE(subscribe(&s, WSG_CMD_GET_WIDTH, 0x03, PERIOD, &f) ==
             WSG_E_SUCCESS);
     check_value_frame(&f);
@@ -291,20 +310,18 @@ static void test_change_only(const struct emu *e)
     CHECK_EQ(count_for(&s, 0, EMU_QUIET_MS, &others), 0);
     CHECK_EQ(others, 0);
     CHECK_EQ(s.bad, 0);
-    CHECK_EQ(emu_request(&s, WSG_CMD_DISCONNECT, NULL, 0, NULL, EMU_REPLY_MS),
-             WSG_E_SUCCESS);
-    emu_close(&s);
+    goodbye(&s);
 }
 
-static void test_several(const struct emu *e)
+static void test_several(struct emu *e)
 {
     struct emu_client s, o;
     struct emu_frame f;
     static const uint16_t periods[NSTREAMS] = {30, 40, 20, 30, 50};
     unsigned before[NSTREAMS];
 
-    REQUIRE(emu_open(&s, e, &emu_tcp) == 0);
-    REQUIRE(emu_open(&o, e, &emu_tcp) == 0);
+    REQUIRE(emu_open(&s, e, tp) == 0);
+    REQUIRE(emu_open(&o, e, tp) == 0);
     /* Each subscription's first packet of its ID is its reply: no stream
      * of that ID ran before. */
     for (unsigned i = 0; i < NSTREAMS; i++) {
@@ -386,15 +403,11 @@ static void test_several(const struct emu *e)
     for (unsigned i = 0; i < NSTREAMS; i++)
         CHECK_EQ(o.seen[stream_ids[i]], 0);
     CHECK_EQ(s.bad, 0);
-    CHECK_EQ(emu_request(&s, WSG_CMD_DISCONNECT, NULL, 0, NULL, EMU_REPLY_MS),
-             WSG_E_SUCCESS);
-    CHECK_EQ(emu_request(&o, WSG_CMD_DISCONNECT, NULL, 0, NULL, EMU_REPLY_MS),
-             WSG_E_SUCCESS);
-    emu_close(&s);
-    emu_close(&o);
+    goodbye(&s);
+    goodbye(&o);
 }
 
-static void test_one_time(const struct emu *e)
+static void test_one_time(struct emu *e)
 {
     enum { NV = 3 };
     /* Empty payload; FLAGS 0 with a period; change-only without the auto
@@ -408,7 +421,7 @@ static void test_one_time(const struct emu *e)
     struct emu_frame f;
 
     for (int v = 0; v < NV; v++) {
-        REQUIRE(emu_open(&c[v], e, &emu_tcp) == 0);
+        REQUIRE(emu_open(&c[v], e, tp) == 0);
         for (unsigned i = 0; i < NSTREAMS; i++) {
             CHECK_EQ(emu_request(&c[v], stream_ids[i], payload[v], plen[v], &f,
                                  EMU_REPLY_MS),
@@ -418,7 +431,7 @@ static void test_one_time(const struct emu *e)
     }
     /* Every value changes during a motion, so a stream started by mistake
      * (even a change-only one) would send something. */
-    REQUIRE(emu_open(&m, e, &emu_tcp) == 0);
+    REQUIRE(emu_open(&m, e, tp) == 0);
     uint8_t p[16];
     size_t n = emu_move_payload(p, 0, 70.0f, 400.0f);
     CHECK_EQ(emu_motion(&m, WSG_CMD_PREPOSITION, p, n, MOVE_MS, NULL),
@@ -428,10 +441,7 @@ static void test_one_time(const struct emu *e)
         for (unsigned i = 0; i < NSTREAMS; i++)
             CHECK_EQ(c[v].seen[stream_ids[i]], 1);
         CHECK_EQ(c[v].bad, 0);
-        CHECK_EQ(emu_request(&c[v], WSG_CMD_DISCONNECT, NULL, 0, NULL,
-                             EMU_REPLY_MS),
-                 WSG_E_SUCCESS);
-        emu_close(&c[v]);
+        goodbye(&c[v]);
     }
 
     /* Neither empty nor FLAGS + PERIOD_MS: "Command length mismatch". */
@@ -445,9 +455,7 @@ static void test_one_time(const struct emu *e)
     unsigned others = 0;
     CHECK_EQ(count_for(&m, 0, EMU_QUIET_MS, &others), 0);
     CHECK_EQ(others, 0);
-    CHECK_EQ(emu_request(&m, WSG_CMD_DISCONNECT, NULL, 0, NULL, EMU_REPLY_MS),
-             WSG_E_SUCCESS);
-    emu_close(&m);
+    goodbye(&m);
 }
 
 /* Subscribe to all five at period ms and wait until packets flow. */
@@ -461,18 +469,18 @@ static void flood(struct emu_client *c, uint16_t period)
         REQUIRE(emu_recv_id(c, WSG_CMD_GET_WIDTH, &f, EMU_REPLY_MS) == 1);
 }
 
-static void test_dropped(const struct emu *e)
+static void test_dropped(struct emu *e)
 {
     struct emu_client d, n;
     unsigned others = 0;
 
     /* Announced close with streams running. */
-    REQUIRE(emu_open(&d, e, &emu_tcp) == 0);
+    REQUIRE(emu_open(&d, e, tp) == 0);
     flood(&d, 10);
     CHECK_EQ(emu_request(&d, WSG_CMD_DISCONNECT, NULL, 0, NULL, EMU_REPLY_MS),
              WSG_E_SUCCESS);
     emu_close(&d);
-    REQUIRE(emu_open(&n, e, &emu_tcp) == 0);
+    REQUIRE(emu_open(&n, e, tp) == 0);
     REQUIRE(emu_sync(&n, EMU_REPLY_MS) == 0);
     CHECK_EQ(count_for(&n, 0, EMU_QUIET_MS, &others), 0);
     CHECK_EQ(others, 0);
@@ -481,11 +489,11 @@ static void test_dropped(const struct emu *e)
      * daemon writes to the dead connection before it reads of its end: its
      * writes fail, and it must shrug that off (a SIGPIPE would kill it). */
     for (int i = 0; i < 5; i++) {
-        REQUIRE(emu_open(&d, e, &emu_tcp) == 0);
+        REQUIRE(emu_open(&d, e, tp) == 0);
         flood(&d, 1);
         emu_abort(&d);
     }
-    REQUIRE(emu_open(&d, e, &emu_tcp) == 0);
+    REQUIRE(emu_open(&d, e, tp) == 0);
     flood(&d, 1);
     emu_close(&d); /* FIN with unread data: a reset as well */
 
@@ -495,7 +503,7 @@ static void test_dropped(const struct emu *e)
     CHECK_EQ(count_for(&n, 0, EMU_QUIET_MS, &others), 0);
     CHECK_EQ(others, 0);
     struct emu_client n2;
-    REQUIRE(emu_open(&n2, e, &emu_tcp) == 0);
+    REQUIRE(emu_open(&n2, e, tp) == 0);
     REQUIRE(emu_sync(&n2, EMU_REPLY_MS) == 0);
     CHECK_EQ(count_for(&n2, 0, EMU_QUIET_MS, &others), 0);
     CHECK_EQ(others, 0);
@@ -517,25 +525,29 @@ static void test_dropped(const struct emu *e)
 
 int main(int argc, char **argv)
 {
-    static const char *const args[] = {"--tcp", "127.0.0.1:0", NULL};
     const char *exe = emu_exe(argc, argv);
     struct emu e;
     struct emu_client a;
 
-    REQUIRE(emu_start(&e, exe, args) == 0);
-    REQUIRE(emu_open(&a, &e, &emu_tcp) == 0);
+    tp = emu_transport_arg(argc, argv);
+    printf("over %s\n", tp->field);
+    REQUIRE(emu_start_tp(&e, exe, tp, NULL) == 0);
+    REQUIRE(emu_open(&a, &e, tp) == 0);
     uint8_t dir = 0;
     REQUIRE(emu_motion(&a, WSG_CMD_HOMING, &dir, 1, HOMING_MS, NULL) ==
             WSG_E_SUCCESS);
-    CHECK_EQ(emu_request(&a, WSG_CMD_DISCONNECT, NULL, 0, NULL, EMU_REPLY_MS),
-             WSG_E_SUCCESS);
-    emu_close(&a);
+    goodbye(&a);
 
     test_period(&e);
-    test_several(&e);
+    /* Several clients at once need peers that are told apart. */
+    if (!tp->single_peer)
+        test_several(&e);
     test_change_only(&e);
-    test_one_time(&e); /* moves from 60 to 70 mm */
-    test_dropped(&e);
+    if (!tp->single_peer)
+        test_one_time(&e); /* moves from 60 to 70 mm */
+    /* Streams ending with their connection. */
+    if (tp->connection)
+        test_dropped(&e);
     /* A crash would show here as a status other than 0. */
     CHECK_EQ(emu_stop(&e), 0);
     TEST_EXIT();

@@ -1,0 +1,249 @@
+/*
+ * The UDP interface, as on a real gripper: requests arrive on one port
+ * (1500), and every answer goes to the sender's IP address at the
+ * configured remote port (1501), not to the datagram's source port: drivers
+ * send from an ephemeral port and receive on a socket bound to 1501.
+ *
+ * One packet per datagram. Each datagram is parsed on its own: several
+ * packets in one are each answered, and a packet cut off at the end of a
+ * datagram is answered E_CMD_FORMAT_ERROR, never joined with the next.
+ *
+ * A peer is an IP address (that is where its answers go): it has a session
+ * with its own auto-update streams and receives the final results of the
+ * motions it started. The peer table is bounded; a new address evicts the
+ * one heard from least recently.
+ */
+#define _GNU_SOURCE
+
+#include <arpa/inet.h>
+#include <errno.h>
+#include <netinet/in.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/epoll.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include "transport.h"
+
+#define WSG_UDP_PEER_BITS           5
+#define WSG_UDP_PEERS               (1u << WSG_UDP_PEER_BITS)
+#define WSG_UDP_PEER_MASK           (WSG_UDP_PEERS - 1u)
+#define WSG_UDP_GEN_MASK            (WSG_TAG_LOCAL_MASK >> WSG_UDP_PEER_BITS)
+#define WSG_UDP_DATAGRAMS_PER_EVENT 64
+#define WSG_UDP_ADDR_LEN            (INET_ADDRSTRLEN + 6)
+
+struct wsg_udp;
+
+struct wsg_udp_peer {
+    struct wsg_udp *udp;
+    int used;
+    uint64_t heard;        /* the udp->clock of its last datagram */
+    struct sockaddr_in to; /* sender's IP, the remote port */
+    struct wsg_session session;
+};
+
+struct wsg_udp {
+    struct wsg_watch watch;
+    struct wsg_device *dev;
+    struct wsg_loop *loop;
+    uint32_t tag_base;
+    int check_crc;
+    uint16_t remote_port;
+    uint32_t next_gen;
+    uint64_t clock;
+    uint64_t send_drops; /* answers the socket would not take */
+    char local[WSG_UDP_ADDR_LEN];
+    struct wsg_udp_peer peers[WSG_UDP_PEERS];
+    uint8_t rx[65536]; /* the largest datagram */
+};
+
+/* The session's send callback: one packet, one datagram. UDP may lose
+ * datagrams anyway, so one the socket will not take now is dropped. */
+static void udp_packet(struct wsg_session *s, const uint8_t *pkt, size_t len)
+{
+    struct wsg_udp_peer *p = s->ctx;
+    ssize_t n;
+
+    n = sendto(p->udp->watch.fd, pkt, len, MSG_DONTWAIT | MSG_NOSIGNAL,
+               (const struct sockaddr *)&p->to, sizeof p->to);
+    if (n != (ssize_t)len)
+        p->udp->send_drops++;
+}
+
+static struct wsg_udp_peer *udp_peer(struct wsg_udp *udp,
+                                     const struct sockaddr_in *from)
+{
+    struct wsg_udp_peer *p, *oldest = NULL;
+    unsigned i;
+
+    for (i = 0; i < WSG_UDP_PEERS; i++) {
+        p = &udp->peers[i];
+        if (p->used && p->to.sin_addr.s_addr == from->sin_addr.s_addr)
+            return p;
+        if (!oldest || !p->used || (oldest->used && p->heard < oldest->heard))
+            oldest = p;
+    }
+    /* A new address: a free slot or the least recently heard peer, whose
+     * streams end with it. */
+    p = oldest;
+    if (p->used)
+        wsg_device_session_closed(udp->dev, &p->session);
+    i = (unsigned)(p - udp->peers);
+    memset(&p->to, 0, sizeof p->to);
+    p->to.sin_family = AF_INET;
+    p->to.sin_addr = from->sin_addr;
+    p->to.sin_port = htons(udp->remote_port);
+    p->udp = udp;
+    p->used = 1;
+    wsg_session_init(&p->session,
+                     udp->tag_base | udp->next_gen << WSG_UDP_PEER_BITS | i, 0,
+                     udp_packet, p);
+    udp->next_gen = (udp->next_gen + 1) & WSG_UDP_GEN_MASK;
+    return p;
+}
+
+static void udp_handle(struct wsg_transport *t, struct wsg_watch *w,
+                       uint32_t events)
+{
+    struct wsg_udp *udp = t->state;
+    int i;
+
+    (void)w;
+    if (!(events & EPOLLIN))
+        return;
+    /* Bounded, so a flood cannot starve the model's steps. */
+    for (i = 0; i < WSG_UDP_DATAGRAMS_PER_EVENT; i++) {
+        struct sockaddr_in from;
+        socklen_t flen = sizeof from;
+        struct wsg_udp_peer *p;
+        ssize_t n = recvfrom(udp->watch.fd, udp->rx, sizeof udp->rx,
+                             MSG_DONTWAIT, (struct sockaddr *)&from, &flen);
+
+        if (n < 0) {
+            if (errno == EINTR)
+                continue;
+            return; /* EAGAIN, or an ICMP error of an earlier send */
+        }
+        if (flen < sizeof from || from.sin_family != AF_INET)
+            continue;
+        p = udp_peer(udp, &from);
+        p->heard = ++udp->clock;
+        wsg_device_input_datagram(udp->dev, &p->session, udp->check_crc,
+                                  udp->rx, (size_t)n);
+    }
+}
+
+static struct wsg_session *udp_lookup(struct wsg_transport *t, uint32_t tag)
+{
+    struct wsg_udp *udp = t->state;
+    struct wsg_udp_peer *p = &udp->peers[tag & WSG_UDP_PEER_MASK];
+
+    return p->used && p->session.tag == tag ? &p->session : NULL;
+}
+
+static void udp_each_session(struct wsg_transport *t, wsg_session_visit_fn fn,
+                             void *ctx)
+{
+    struct wsg_udp *udp = t->state;
+    unsigned i;
+
+    for (i = 0; i < WSG_UDP_PEERS; i++)
+        if (udp->peers[i].used)
+            fn(ctx, &udp->peers[i].session);
+}
+
+static int udp_describe(const struct wsg_transport *t, char *buf, size_t len)
+{
+    const struct wsg_udp *udp = t->state;
+    int r =
+        snprintf(buf, len, "%s>%u", udp->local, (unsigned)udp->remote_port);
+
+    return r < 0 || (size_t)r >= len ? -ENOSPC : 0;
+}
+
+static void udp_close(struct wsg_transport *t)
+{
+    struct wsg_udp *udp = t->state;
+
+    if (!udp)
+        return;
+    if (udp->watch.fd >= 0) {
+        wsg_loop_watch_del(udp->loop, &udp->watch);
+        close(udp->watch.fd);
+    }
+    free(udp);
+    t->state = NULL;
+}
+
+static int udp_open(struct wsg_transport *t,
+                    const struct wsg_transport_env *env, char *err,
+                    size_t errlen)
+{
+    const struct wsg_endpoint *ep = &env->opt->udp;
+    struct wsg_udp *udp;
+    struct sockaddr_in sa;
+    socklen_t salen = sizeof sa;
+    char ip[INET_ADDRSTRLEN];
+    int r;
+
+    memset(&sa, 0, sizeof sa);
+    sa.sin_family = AF_INET;
+    memcpy(&sa.sin_addr.s_addr, ep->addr, 4);
+    sa.sin_port = htons(ep->port);
+    inet_ntop(AF_INET, &sa.sin_addr, ip, sizeof ip);
+
+    udp = calloc(1, sizeof *udp);
+    if (!udp) {
+        r = -ENOMEM;
+        goto fail;
+    }
+    t->state = udp;
+    udp->dev = env->dev;
+    udp->loop = env->loop;
+    udp->tag_base = t->tag_base;
+    udp->check_crc = env->opt->check_crc;
+    udp->remote_port = env->opt->udp_remote_port;
+    udp->watch.owner = t;
+    udp->watch.fd =
+        socket(AF_INET, SOCK_DGRAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
+    if (udp->watch.fd < 0)
+        goto fail_errno;
+    if (bind(udp->watch.fd, (struct sockaddr *)&sa, sizeof sa) < 0)
+        goto fail_errno;
+    if (getsockname(udp->watch.fd, (struct sockaddr *)&sa, &salen) < 0)
+        goto fail_errno;
+    snprintf(udp->local, sizeof udp->local, "%s:%u", ip,
+             (unsigned)ntohs(sa.sin_port));
+    r = wsg_loop_watch_add(udp->loop, &udp->watch, EPOLLIN);
+    if (r < 0)
+        goto fail;
+    return 0;
+
+fail_errno:
+    r = -errno;
+fail:
+    if (r == -EACCES && ep->port < 1024)
+        snprintf(err, errlen,
+                 "cannot listen on udp %s:%u: %s (ports below 1024 need root "
+                 "or CAP_NET_BIND_SERVICE; --udp 127.0.0.1:PORT picks "
+                 "another)",
+                 ip, (unsigned)ep->port, strerror(-r));
+    else
+        snprintf(err, errlen, "cannot listen on udp %s:%u: %s", ip,
+                 (unsigned)ep->port, strerror(-r));
+    udp_close(t);
+    return r;
+}
+
+const struct wsg_transport_ops wsg_udp_ops = {
+    .name = "udp",
+    .open = udp_open,
+    .close = udp_close,
+    .handle = udp_handle,
+    .describe = udp_describe,
+    .lookup = udp_lookup,
+    .each_session = udp_each_session,
+    .settle = NULL,
+};
