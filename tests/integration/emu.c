@@ -593,7 +593,7 @@ const struct emu_transport emu_tcp = {
 };
 
 const struct emu_transport *const emu_transports[] = {&emu_tcp, &emu_udp,
-                                                      &emu_can, NULL};
+                                                      NULL};
 
 /* ---- clients ---- */
 

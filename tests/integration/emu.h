@@ -7,7 +7,7 @@
  * address named by a field of the ready line, send one packet, receive bytes
  * with a timeout, close. Everything above it (framing with the core's
  * wsg_parser, waiting for a given ID, request/reply) is shared, so the same
- * tests can run over every interface the daemon offers. Only TCP exists now.
+ * tests can run over every interface the daemon offers.
  *
  * Every wait takes a timeout: a daemon that never answers fails the test
  * instead of hanging it.
@@ -126,7 +126,6 @@ struct emu_transport {
 
 extern const struct emu_transport emu_tcp;
 extern const struct emu_transport emu_udp;
-extern const struct emu_transport emu_can; /* emu_can.c */
 /* Every transport this library knows, NULL-terminated. */
 extern const struct emu_transport *const emu_transports[];
 
