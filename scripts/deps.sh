@@ -5,6 +5,13 @@
 set -eu
 
 pkgs="cmake make gcc libc6-dev"
+# The CAN tests (tests/can/run.sh): where the host kernel has no vcan, QEMU
+# boots Debian's kernel with it; xz unpacks that kernel, iproute2's ip and
+# tc make the buses. The kernel and busybox themselves are only downloaded,
+# by tests/can/vm-image.sh. The VM runs amd64 programs: amd64 hosts only.
+if [ "$(dpkg --print-architecture)" = amd64 ]; then
+    pkgs="$pkgs qemu-system-x86 xz-utils iproute2"
+fi
 
 missing=""
 for p in $pkgs; do

@@ -71,6 +71,16 @@ int wsg_daemon_open(struct wsg_daemon *d)
         if (r < 0)
             return r;
     }
+    if (d->opt.pty_path) {
+        r = open_transport(d, &wsg_pty_ops);
+        if (r < 0)
+            return r;
+    }
+    if (d->opt.can_iface) {
+        r = open_transport(d, &wsg_can_ops);
+        if (r < 0)
+            return r;
+    }
     wsg_loop_set_transports(&d->loop, d->transports, d->ntransports);
     return 0;
 }

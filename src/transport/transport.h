@@ -66,6 +66,8 @@ struct wsg_transport {
 
 extern const struct wsg_transport_ops wsg_tcp_ops;
 extern const struct wsg_transport_ops wsg_udp_ops;
+extern const struct wsg_transport_ops wsg_pty_ops;
+extern const struct wsg_transport_ops wsg_can_ops;
 
 /* Route a tag to the transport that issued it. */
 struct wsg_session *wsg_transport_lookup(struct wsg_transport *ts, size_t n,

@@ -134,8 +134,10 @@ static pid_t spawn(const char *exe, const char *const *args, int *out_fd,
         prctl(PR_SET_PDEATHSIG, SIGKILL);
 #endif
         int devnull = open("/dev/null", O_RDONLY);
-        if (devnull >= 0)
+        if (devnull > 0) {
             dup2(devnull, 0);
+            close(devnull);
+        }
         dup2(po[1], 1);
         if (err_fd)
             dup2(pe[1], 2);
@@ -592,8 +594,8 @@ const struct emu_transport emu_tcp = {
     .connection = 1,
 };
 
-const struct emu_transport *const emu_transports[] = {&emu_tcp, &emu_udp,
-                                                      NULL};
+const struct emu_transport *const emu_transports[] = {
+    &emu_tcp, &emu_udp, &emu_can, &emu_pty, NULL};
 
 /* ---- clients ---- */
 

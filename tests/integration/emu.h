@@ -126,6 +126,8 @@ struct emu_transport {
 
 extern const struct emu_transport emu_tcp;
 extern const struct emu_transport emu_udp;
+extern const struct emu_transport emu_can; /* emu_can.c */
+extern const struct emu_transport emu_pty; /* emu_pty.c */
 /* Every transport this library knows, NULL-terminated. */
 extern const struct emu_transport *const emu_transports[];
 

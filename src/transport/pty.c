@@ -1,0 +1,576 @@
+/*
+ * The serial interface: a pseudo-terminal whose slave side (/dev/pts/N) is
+ * linked from the path given with --pty, so a driver opens that path as it
+ * would /dev/ttyUSB0 and sets whatever termios it likes. The emulator owns
+ * the master side: one line, one wsg_session (not connection-oriented: no
+ * 07h, and a close is no disconnect), one stream parser.
+ *
+ * A serial line has no connection, but the host's port can be closed. While
+ * it is, the emulator sends nothing (its packets are lost, as on a real
+ * line) and must not wake: after the last close of the slave the master
+ * polls POLLHUP for good, so it leaves the epoll set and an inotify IN_OPEN
+ * watch on the slave brings it back when a driver opens the port again. A
+ * slave that was never opened shows no HUP, so the line starts out closed
+ * and waiting for IN_OPEN too.
+ *
+ * The kernel keeps the slave's input (what the emulator wrote and the host
+ * had not read) across a close and hands it to the next opener, cut
+ * anywhere in a packet. A real port loses it, so at each close the
+ * emulator flushes it through the master. A poll of the master after
+ * leaving the epoll set tells whether a driver opened the port again
+ * meanwhile (its IN_OPEN may have been taken while the master was still
+ * in the set), so no open is missed.
+ *
+ * Every packet leaves in one write() when the terminal takes it whole; the
+ * rest waits in a bounded queue for EPOLLOUT. A host that keeps the port
+ * open but does not read costs whole packets beyond the bound (counted),
+ * never a broken one.
+ *
+ * Tag: transport base | 1, the only session.
+ */
+#define _GNU_SOURCE
+
+#include <errno.h>
+#include <fcntl.h>
+#include <poll.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/epoll.h>
+#include <sys/inotify.h>
+#include <sys/stat.h>
+#include <termios.h>
+#include <unistd.h>
+
+#include "transport.h"
+
+#define WSG_PTY_QUEUE_MAX       65536u
+#define WSG_PTY_READ_CHUNK      4096u
+#define WSG_PTY_READS_PER_EVENT 16
+#define WSG_PTY_READS_AT_CLOSE  64 /* 256 KiB: more than a pty holds */
+#define WSG_PTY_SLAVE_LEN       64
+
+struct wsg_pty {
+    struct wsg_watch master; /* the master side of the pseudo-terminal */
+    struct wsg_watch notify; /* inotify: IN_OPEN of the slave */
+    struct wsg_loop *loop;
+    struct wsg_device *dev;
+    const char *path; /* as given: the ready line shows it so */
+    int check_crc;
+    int linked;       /* path is our symlink */
+    int watching;     /* notify is in the epoll set */
+    int active;       /* master in the epoll set: the host has the port open */
+    int hup;          /* the host closed it: settle takes the master out */
+    uint32_t events;  /* as registered with epoll while active */
+    uint64_t dropped; /* packets discarded at the queue's bound */
+    uint64_t reported; /* of those, already reported */
+    char slave[WSG_PTY_SLAVE_LEN];
+    struct wsg_parser parser;
+    struct wsg_session session;
+    size_t qhead, qlen; /* pending output: queue[qhead .. qhead+qlen) */
+    uint8_t queue[WSG_PTY_QUEUE_MAX];
+};
+
+static void report_drops(struct wsg_pty *pty)
+{
+    if (pty->dropped == pty->reported)
+        return;
+    fprintf(stderr,
+            "wsgemu: pty %s: host not reading: %llu packets discarded "
+            "(output queue full)\n",
+            pty->path, (unsigned long long)(pty->dropped - pty->reported));
+    pty->reported = pty->dropped;
+}
+
+static void queue_clear(struct wsg_pty *pty)
+{
+    pty->qhead = 0;
+    pty->qlen = 0;
+}
+
+static void set_events(struct wsg_pty *pty, uint32_t events)
+{
+    int r;
+
+    if (!pty->active || pty->events == events)
+        return;
+    r = wsg_loop_watch_mod(pty->loop, &pty->master, events);
+    if (r < 0) {
+        /* Cannot happen with a registered descriptor; if it does, start
+         * over as if the port had been closed. */
+        fprintf(stderr, "wsgemu: pty %s: epoll: %s\n", pty->path,
+                strerror(-r));
+        pty->hup = 1;
+        return;
+    }
+    pty->events = events;
+}
+
+/* One write() of as much as the terminal takes. Returns bytes written (0
+ * when it is full) or -errno. */
+static ssize_t pty_write(struct wsg_pty *pty, const uint8_t *p, size_t len)
+{
+    for (;;) {
+        ssize_t n = write(pty->master.fd, p, len);
+
+        if (n >= 0)
+            return n;
+        if (errno == EINTR)
+            continue;
+        if (errno == EAGAIN || errno == EWOULDBLOCK)
+            return 0;
+        return -errno;
+    }
+}
+
+static void write_failed(struct wsg_pty *pty, int err)
+{
+    /* Linux takes writes even while the port is closed (hang_up flushes
+     * them), so an error is unexpected; EIO may mean a closed port
+     * elsewhere. Either way, start over: hang up, wait for an open. */
+    if (err != EIO)
+        fprintf(stderr, "wsgemu: pty %s: write: %s\n", pty->path,
+                strerror(err));
+    pty->hup = 1;
+}
+
+static void enqueue(struct wsg_pty *pty, const uint8_t *p, size_t len)
+{
+    if (pty->qlen + len > WSG_PTY_QUEUE_MAX) {
+        /* A whole packet goes, never part of one: what the host reads
+         * later still parses. */
+        pty->dropped++;
+        return;
+    }
+    if (pty->qhead + pty->qlen + len > WSG_PTY_QUEUE_MAX) {
+        memmove(pty->queue, pty->queue + pty->qhead, pty->qlen);
+        pty->qhead = 0;
+    }
+    memcpy(pty->queue + pty->qhead + pty->qlen, p, len);
+    pty->qlen += len;
+    set_events(pty, pty->events | EPOLLOUT);
+}
+
+/* The session's send callback: one packet. */
+static void pty_packet(struct wsg_session *s, const uint8_t *pkt, size_t len)
+{
+    struct wsg_pty *pty = s->ctx;
+    ssize_t n;
+
+    /* Nobody has the port open: the packet is lost on the line. */
+    if (!pty->active || pty->hup)
+        return;
+    /* Behind queued bytes a packet must wait its turn. */
+    if (pty->qlen > 0) {
+        enqueue(pty, pkt, len);
+        return;
+    }
+    n = pty_write(pty, pkt, len);
+    if (n < 0) {
+        write_failed(pty, (int)-n);
+        return;
+    }
+    if ((size_t)n < len)
+        enqueue(pty, pkt + n, len - (size_t)n);
+}
+
+static void flush_queue(struct wsg_pty *pty)
+{
+    ssize_t n;
+
+    if (pty->qlen == 0)
+        return;
+    n = pty_write(pty, pty->queue + pty->qhead, pty->qlen);
+    if (n < 0) {
+        write_failed(pty, (int)-n);
+        return;
+    }
+    pty->qhead += (size_t)n;
+    pty->qlen -= (size_t)n;
+    if (pty->qlen == 0) {
+        queue_clear(pty);
+        set_events(pty, pty->events & ~(uint32_t)EPOLLOUT);
+        report_drops(pty);
+    }
+}
+
+/* Read and dispatch. After the host's last close the master returns what
+ * was sent before it, then EIO; that is read to the end (the master leaves
+ * the epoll set next, and the rest would reach the next opener's session
+ * as stale input). A closed port cannot send more than the pty holds. */
+static void read_input(struct wsg_pty *pty, int closing)
+{
+    int max = closing ? WSG_PTY_READS_AT_CLOSE : WSG_PTY_READS_PER_EVENT;
+    uint8_t buf[WSG_PTY_READ_CHUNK];
+    int i;
+
+    for (i = 0; i < max; i++) {
+        ssize_t n = read(pty->master.fd, buf, sizeof buf);
+
+        if (n > 0) {
+            wsg_device_input(pty->dev, &pty->session, &pty->parser, buf,
+                             (size_t)n);
+            continue;
+        }
+        if (n < 0 && errno == EINTR)
+            continue;
+        if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK))
+            return;
+        /* EIO (or 0): nobody has the port open. */
+        if (n < 0 && errno != EIO)
+            fprintf(stderr, "wsgemu: pty %s: read: %s\n", pty->path,
+                    strerror(errno));
+        pty->hup = 1;
+        return;
+    }
+}
+
+/* Is the slave closed by everyone? A master whose poll fails counts as
+ * closed: IN_OPEN will tell when that changes. */
+static int master_hung_up(const struct wsg_pty *pty)
+{
+    struct pollfd p;
+    int r;
+
+    p.fd = pty->master.fd;
+    p.events = 0;
+    p.revents = 0;
+    do
+        r = poll(&p, 1, 0);
+    while (r < 0 && errno == EINTR);
+    return r != 1 || (p.revents & (POLLHUP | POLLERR | POLLNVAL)) != 0;
+}
+
+static void drain_notify(struct wsg_pty *pty)
+{
+    /* Aligned as inotify_event requires; the events carry no name (the
+     * watch is on the file itself), but a full buffer costs nothing. */
+    union {
+        struct inotify_event ev;
+        char bytes[4096];
+    } buf;
+
+    for (;;) {
+        ssize_t n = read(pty->notify.fd, &buf, sizeof buf);
+
+        if (n > 0)
+            continue;
+        if (n < 0 && errno == EINTR)
+            continue;
+        return;
+    }
+}
+
+/* Throw away what the host did not read before it closed the port: the
+ * terminal would hand it to the next opener, starting anywhere in a packet,
+ * where a real port loses it. It waits in two places, both reachable from
+ * the master: TCOFLUSH empties the slave's input buffers, and setting the
+ * slave's termios unchanged with TCSAFLUSH empties its line discipline.
+ * (Opening the slave to flush it there would race with a driver's open:
+ * measured, one reopen in a few hundred then found the master still
+ * hung up.) The termios are only written back while nobody has the port
+ * open, so a driver's own settings are not undone. */
+static void flush_slave_input(struct wsg_pty *pty)
+{
+    struct termios tio;
+
+    tcflush(pty->master.fd, TCOFLUSH);
+    if (tcgetattr(pty->master.fd, &tio) == 0 && master_hung_up(pty))
+        tcsetattr(pty->master.fd, TCSAFLUSH, &tio);
+}
+
+/* The port is open: serve it. */
+static void activate(struct wsg_pty *pty)
+{
+    int r;
+
+    if (pty->active)
+        return;
+    pty->events = EPOLLIN;
+    r = wsg_loop_watch_add(pty->loop, &pty->master, pty->events);
+    if (r < 0) {
+        fprintf(stderr, "wsgemu: pty %s: epoll: %s\n", pty->path,
+                strerror(-r));
+        return;
+    }
+    pty->active = 1;
+}
+
+/* The host closed the port: stop watching the master (its POLLHUP would
+ * wake us forever), forget what was on the way in both directions, and
+ * wait for the next open. Not a disconnect: no FAST STOP, the session and
+ * its streams stay. */
+static void hang_up(struct wsg_pty *pty)
+{
+    pty->hup = 0;
+    if (pty->active) {
+        wsg_loop_watch_del(pty->loop, &pty->master);
+        pty->active = 0;
+    }
+    report_drops(pty);
+    queue_clear(pty);
+    /* A packet half sent by the old opener must not swallow the start of
+     * the next one's. */
+    wsg_parser_init(&pty->parser, pty->check_crc);
+    /* Opened again between the HUP and now: its IN_OPEN may have been
+     * taken while the master was still active, but the HUP is gone. */
+    if (!master_hung_up(pty)) {
+        activate(pty);
+        return;
+    }
+    flush_slave_input(pty);
+}
+
+static void on_notify(struct wsg_pty *pty)
+{
+    drain_notify(pty);
+    /* While active (or about to hang up, which checks again itself) an
+     * open changes nothing. A spurious one while closed costs one HUP. */
+    if (!pty->active && !pty->hup)
+        activate(pty);
+}
+
+static void pty_handle(struct wsg_transport *t, struct wsg_watch *w,
+                       uint32_t events)
+{
+    struct wsg_pty *pty = t->state;
+    int closing = (events & (EPOLLHUP | EPOLLERR)) != 0;
+
+    if (w == &pty->notify) {
+        on_notify(pty);
+        return;
+    }
+    if (!pty->active || pty->hup)
+        return;
+    /* Queued output first: new replies belong behind it. */
+    if (events & EPOLLOUT)
+        flush_queue(pty);
+    /* What the host sent before it closed still reaches the gripper. */
+    if (events & (EPOLLIN | EPOLLHUP | EPOLLERR))
+        read_input(pty, closing);
+    if (closing)
+        pty->hup = 1;
+}
+
+static void pty_settle(struct wsg_transport *t)
+{
+    struct wsg_pty *pty = t->state;
+
+    if (pty->hup)
+        hang_up(pty);
+}
+
+static struct wsg_session *pty_lookup(struct wsg_transport *t, uint32_t tag)
+{
+    struct wsg_pty *pty = t->state;
+
+    return pty->session.tag == tag ? &pty->session : NULL;
+}
+
+/* The session lives as long as the transport: its streams run on while the
+ * port is closed, like a real gripper's on its serial line. */
+static void pty_each_session(struct wsg_transport *t, wsg_session_visit_fn fn,
+                             void *ctx)
+{
+    struct wsg_pty *pty = t->state;
+
+    fn(ctx, &pty->session);
+}
+
+static int pty_describe(const struct wsg_transport *t, char *buf, size_t len)
+{
+    const struct wsg_pty *pty = t->state;
+    int r = snprintf(buf, len, "%s", pty->path);
+
+    return r < 0 || (size_t)r >= len ? -ENOSPC : 0;
+}
+
+/* Remove path if it is still our link (another emulator may have taken it
+ * over since). */
+static void unlink_ours(struct wsg_pty *pty)
+{
+    char target[WSG_PTY_SLAVE_LEN];
+    ssize_t n;
+
+    if (!pty->linked)
+        return;
+    pty->linked = 0;
+    n = readlink(pty->path, target, sizeof target - 1);
+    if (n < 0)
+        return;
+    target[n] = '\0';
+    if (strcmp(target, pty->slave) == 0)
+        unlink(pty->path);
+}
+
+/* PATH becomes a symlink to the slave. An old symlink (a previous run's) is
+ * replaced; anything else is the user's and stays. */
+static int make_link(struct wsg_pty *pty, char *err, size_t errlen)
+{
+    struct stat st;
+    int r;
+
+    if (symlink(pty->slave, pty->path) == 0)
+        goto done;
+    if (errno != EEXIST)
+        goto fail;
+    if (lstat(pty->path, &st) < 0)
+        goto fail;
+    if (!S_ISLNK(st.st_mode)) {
+        snprintf(err, errlen,
+                 "cannot open pty %s: it exists and is not a symlink "
+                 "(remove it or give another path)",
+                 pty->path);
+        return -EEXIST;
+    }
+    if (unlink(pty->path) < 0 && errno != ENOENT)
+        goto fail;
+    if (symlink(pty->slave, pty->path) < 0)
+        goto fail;
+done:
+    pty->linked = 1;
+    return 0;
+fail:
+    r = -errno;
+    snprintf(err, errlen, "cannot open pty %s: symlink to %s: %s", pty->path,
+             pty->slave, strerror(-r));
+    return r;
+}
+
+static void pty_free(struct wsg_pty *pty)
+{
+    unlink_ours(pty);
+    if (pty->active)
+        wsg_loop_watch_del(pty->loop, &pty->master);
+    if (pty->watching)
+        wsg_loop_watch_del(pty->loop, &pty->notify);
+    if (pty->notify.fd >= 0)
+        close(pty->notify.fd);
+    if (pty->master.fd >= 0)
+        close(pty->master.fd);
+    free(pty);
+}
+
+static void pty_close(struct wsg_transport *t)
+{
+    struct wsg_pty *pty = t->state;
+
+    if (!pty)
+        return;
+    report_drops(pty);
+    wsg_device_session_closed(pty->dev, &pty->session);
+    pty_free(pty);
+    t->state = NULL;
+}
+
+/* Raw from the start, so a driver that sets nothing gets the bytes as
+ * sent. Set through the master, since nobody may open the slave before
+ * the link exists. 115200 8N1 is the gripper's default; a driver sets its
+ * own anyway. */
+static int make_raw(int fd)
+{
+    struct termios tio;
+
+    if (tcgetattr(fd, &tio) < 0)
+        return -errno;
+    cfmakeraw(&tio);
+    tio.c_cflag |= CLOCAL | CREAD;
+    tio.c_cc[VMIN] = 1;
+    tio.c_cc[VTIME] = 0;
+    if (cfsetspeed(&tio, B115200) < 0)
+        return -errno;
+    if (tcsetattr(fd, TCSANOW, &tio) < 0)
+        return -errno;
+    return 0;
+}
+
+static int pty_open(struct wsg_transport *t,
+                    const struct wsg_transport_env *env, char *err,
+                    size_t errlen)
+{
+    struct wsg_pty *pty;
+    const char *step = "setup";
+    int r;
+
+    /* The queue is the bulk of the struct and needs no initial value. */
+    pty = malloc(sizeof *pty);
+    if (!pty) {
+        r = -ENOMEM;
+        goto fail;
+    }
+    memset(pty, 0, offsetof(struct wsg_pty, queue));
+    pty->master.fd = -1;
+    pty->notify.fd = -1;
+    pty->master.owner = t;
+    pty->notify.owner = t;
+    pty->loop = env->loop;
+    pty->dev = env->dev;
+    pty->path = env->opt->pty_path;
+    pty->check_crc = env->opt->check_crc;
+
+    step = "posix_openpt";
+    pty->master.fd = posix_openpt(O_RDWR | O_NOCTTY | O_NONBLOCK | O_CLOEXEC);
+    if (pty->master.fd < 0)
+        goto fail_errno;
+    step = "grantpt";
+    if (grantpt(pty->master.fd) < 0)
+        goto fail_errno;
+    step = "unlockpt";
+    if (unlockpt(pty->master.fd) < 0)
+        goto fail_errno;
+    step = "ptsname";
+    r = ptsname_r(pty->master.fd, pty->slave, sizeof pty->slave);
+    if (r != 0) {
+        r = -r;
+        goto fail;
+    }
+    step = "termios";
+    r = make_raw(pty->master.fd);
+    if (r < 0)
+        goto fail;
+    step = "inotify";
+    pty->notify.fd = inotify_init1(IN_NONBLOCK | IN_CLOEXEC);
+    if (pty->notify.fd < 0)
+        goto fail_errno;
+    if (inotify_add_watch(pty->notify.fd, pty->slave, IN_OPEN) < 0)
+        goto fail_errno;
+    step = "epoll";
+    r = wsg_loop_watch_add(pty->loop, &pty->notify, EPOLLIN);
+    if (r < 0)
+        goto fail;
+    pty->watching = 1;
+    wsg_parser_init(&pty->parser, pty->check_crc);
+    wsg_session_init(&pty->session, t->tag_base | 1u, 0, pty_packet, pty);
+    t->state = pty;
+    /* Last, so nothing can fail after the link exists. */
+    r = make_link(pty, err, errlen);
+    if (r < 0) {
+        pty_free(pty);
+        t->state = NULL;
+        return r;
+    }
+    /* Nobody has opened the slave yet: wait for IN_OPEN. */
+    return 0;
+
+fail_errno:
+    r = -errno;
+fail:
+    snprintf(err, errlen, "cannot open pty %s: %s: %s",
+             env->opt->pty_path ? env->opt->pty_path : "?", step,
+             strerror(-r));
+    if (pty)
+        pty_free(pty);
+    t->state = NULL;
+    return r;
+}
+
+const struct wsg_transport_ops wsg_pty_ops = {
+    .name = "pty",
+    .open = pty_open,
+    .close = pty_close,
+    .handle = pty_handle,
+    .describe = pty_describe,
+    .lookup = pty_lookup,
+    .each_session = pty_each_session,
+    .settle = pty_settle,
+};
