@@ -61,25 +61,24 @@ int wsg_daemon_open(struct wsg_daemon *d)
         return r;
     }
     wsg_loop_set_transports(&d->loop, d->transports, 0);
-    if (d->opt.tcp_enabled) {
-        r = open_transport(d, &wsg_tcp_ops);
-        if (r < 0)
-            return r;
-    }
-    if (d->opt.udp_enabled) {
-        r = open_transport(d, &wsg_udp_ops);
-        if (r < 0)
-            return r;
-    }
-    if (d->opt.pty_path) {
-        r = open_transport(d, &wsg_pty_ops);
-        if (r < 0)
-            return r;
-    }
-    if (d->opt.can_iface) {
-        r = open_transport(d, &wsg_can_ops);
-        if (r < 0)
-            return r;
+    {
+        /* In this order on the ready line. */
+        const struct {
+            int on;
+            const struct wsg_transport_ops *ops;
+        } want[] = {{d->opt.tcp_enabled, &wsg_tcp_ops},
+                    {d->opt.udp_enabled, &wsg_udp_ops},
+                    {d->opt.pty_path != NULL, &wsg_pty_ops},
+                    {d->opt.can_iface != NULL, &wsg_can_ops}};
+        size_t i;
+
+        for (i = 0; i < sizeof want / sizeof want[0]; i++) {
+            if (!want[i].on)
+                continue;
+            r = open_transport(d, want[i].ops);
+            if (r < 0)
+                return r;
+        }
     }
     wsg_loop_set_transports(&d->loop, d->transports, d->ntransports);
     return 0;

@@ -42,9 +42,9 @@
 #include <termios.h>
 #include <unistd.h>
 
+#include "outq.h"
 #include "transport.h"
 
-#define WSG_PTY_QUEUE_MAX       65536u
 #define WSG_PTY_READ_CHUNK      4096u
 #define WSG_PTY_READS_PER_EVENT 16
 #define WSG_PTY_READS_AT_CLOSE  64 /* 256 KiB: more than a pty holds */
@@ -67,8 +67,7 @@ struct wsg_pty {
     char slave[WSG_PTY_SLAVE_LEN];
     struct wsg_parser parser;
     struct wsg_session session;
-    size_t qhead, qlen; /* pending output: queue[qhead .. qhead+qlen) */
-    uint8_t queue[WSG_PTY_QUEUE_MAX];
+    struct wsg_outq out; /* last: its buffer needs no initial value */
 };
 
 static void report_drops(struct wsg_pty *pty)
@@ -80,12 +79,6 @@ static void report_drops(struct wsg_pty *pty)
             "(output queue full)\n",
             pty->path, (unsigned long long)(pty->dropped - pty->reported));
     pty->reported = pty->dropped;
-}
-
-static void queue_clear(struct wsg_pty *pty)
-{
-    pty->qhead = 0;
-    pty->qlen = 0;
 }
 
 static void set_events(struct wsg_pty *pty, uint32_t events)
@@ -106,23 +99,6 @@ static void set_events(struct wsg_pty *pty, uint32_t events)
     pty->events = events;
 }
 
-/* One write() of as much as the terminal takes. Returns bytes written (0
- * when it is full) or -errno. */
-static ssize_t pty_write(struct wsg_pty *pty, const uint8_t *p, size_t len)
-{
-    for (;;) {
-        ssize_t n = write(pty->master.fd, p, len);
-
-        if (n >= 0)
-            return n;
-        if (errno == EINTR)
-            continue;
-        if (errno == EAGAIN || errno == EWOULDBLOCK)
-            return 0;
-        return -errno;
-    }
-}
-
 static void write_failed(struct wsg_pty *pty, int err)
 {
     /* Linux takes writes even while the port is closed (hang_up flushes
@@ -134,64 +110,37 @@ static void write_failed(struct wsg_pty *pty, int err)
     pty->hup = 1;
 }
 
-static void enqueue(struct wsg_pty *pty, const uint8_t *p, size_t len)
+/* After a send or a flush: watch EPOLLOUT while bytes wait. A host that
+ * keeps the port open but does not read loses whole packets beyond the
+ * queue's bound, never part of one: what it reads later still parses. */
+static void sent(struct wsg_pty *pty, int r)
 {
-    if (pty->qlen + len > WSG_PTY_QUEUE_MAX) {
-        /* A whole packet goes, never part of one: what the host reads
-         * later still parses. */
+    if (r == -ENOBUFS) {
         pty->dropped++;
-        return;
+    } else if (r < 0) {
+        write_failed(pty, -r);
+    } else if (r) {
+        set_events(pty, pty->events | EPOLLOUT);
+    } else {
+        set_events(pty, pty->events & ~(uint32_t)EPOLLOUT);
+        report_drops(pty);
     }
-    if (pty->qhead + pty->qlen + len > WSG_PTY_QUEUE_MAX) {
-        memmove(pty->queue, pty->queue + pty->qhead, pty->qlen);
-        pty->qhead = 0;
-    }
-    memcpy(pty->queue + pty->qhead + pty->qlen, p, len);
-    pty->qlen += len;
-    set_events(pty, pty->events | EPOLLOUT);
 }
 
 /* The session's send callback: one packet. */
 static void pty_packet(struct wsg_session *s, const uint8_t *pkt, size_t len)
 {
     struct wsg_pty *pty = s->ctx;
-    ssize_t n;
 
     /* Nobody has the port open: the packet is lost on the line. */
     if (!pty->active || pty->hup)
         return;
-    /* Behind queued bytes a packet must wait its turn. */
-    if (pty->qlen > 0) {
-        enqueue(pty, pkt, len);
-        return;
-    }
-    n = pty_write(pty, pkt, len);
-    if (n < 0) {
-        write_failed(pty, (int)-n);
-        return;
-    }
-    if ((size_t)n < len)
-        enqueue(pty, pkt + n, len - (size_t)n);
+    sent(pty, wsg_outq_send(&pty->out, pty->master.fd, pkt, len));
 }
 
 static void flush_queue(struct wsg_pty *pty)
 {
-    ssize_t n;
-
-    if (pty->qlen == 0)
-        return;
-    n = pty_write(pty, pty->queue + pty->qhead, pty->qlen);
-    if (n < 0) {
-        write_failed(pty, (int)-n);
-        return;
-    }
-    pty->qhead += (size_t)n;
-    pty->qlen -= (size_t)n;
-    if (pty->qlen == 0) {
-        queue_clear(pty);
-        set_events(pty, pty->events & ~(uint32_t)EPOLLOUT);
-        report_drops(pty);
-    }
+    sent(pty, wsg_outq_flush(&pty->out, pty->master.fd));
 }
 
 /* Read and dispatch. After the host's last close the master returns what
@@ -308,7 +257,7 @@ static void hang_up(struct wsg_pty *pty)
         pty->active = 0;
     }
     report_drops(pty);
-    queue_clear(pty);
+    wsg_outq_clear(&pty->out);
     /* A packet half sent by the old opener must not swallow the start of
      * the next one's. */
     wsg_parser_init(&pty->parser, pty->check_crc);
@@ -498,7 +447,8 @@ static int pty_open(struct wsg_transport *t,
         r = -ENOMEM;
         goto fail;
     }
-    memset(pty, 0, offsetof(struct wsg_pty, queue));
+    memset(pty, 0, offsetof(struct wsg_pty, out));
+    wsg_outq_init(&pty->out, 0);
     pty->master.fd = -1;
     pty->notify.fd = -1;
     pty->master.owner = t;

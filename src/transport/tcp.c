@@ -6,7 +6,7 @@
  * Drivers read a reply with a single recv(), so every packet leaves in one
  * send() whenever the socket takes it whole. When it does not, the rest and
  * every later packet wait in the connection's queue, in order, until
- * EPOLLOUT; a client that lets its queue grow past WSG_TCP_QUEUE_MAX is
+ * EPOLLOUT; a client that lets its queue grow past WSG_OUTQ_MAX (64 KiB) is
  * dropped rather than slowing anyone else down. Nothing ever blocks.
  *
  * A connection that ends (EOF, error, dropped) is only marked during the
@@ -32,13 +32,13 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include "outq.h"
 #include "transport.h"
 
 #define WSG_TCP_SLOT_BITS         8
 #define WSG_TCP_CONN_MAX          (1u << WSG_TCP_SLOT_BITS)
 #define WSG_TCP_SLOT_MASK         (WSG_TCP_CONN_MAX - 1u)
 #define WSG_TCP_GEN_MASK          (WSG_TAG_LOCAL_MASK >> WSG_TCP_SLOT_BITS)
-#define WSG_TCP_QUEUE_MAX         65536u
 #define WSG_TCP_READ_CHUNK        4096u
 #define WSG_TCP_READS_PER_EVENT   16
 #define WSG_TCP_ACCEPTS_PER_EVENT 16
@@ -56,8 +56,7 @@ struct wsg_tcp_conn {
     char peer[WSG_TCP_ADDR_LEN];
     struct wsg_parser parser;
     struct wsg_session session;
-    size_t qhead, qlen; /* pending output: queue[qhead .. qhead+qlen) */
-    uint8_t queue[WSG_TCP_QUEUE_MAX];
+    struct wsg_outq out; /* last: its buffer needs no initial value */
 };
 
 struct wsg_tcp {
@@ -116,85 +115,38 @@ static int send_errno_is_peer_gone(int e)
            e == EHOSTUNREACH || e == ENETUNREACH;
 }
 
-/* One send() of as much as the socket takes. Returns bytes sent (0 when
- * the socket is full) or -errno. */
-static ssize_t conn_send(struct wsg_tcp_conn *c, const uint8_t *p, size_t len)
-{
-    for (;;) {
-        ssize_t n = send(c->watch.fd, p, len, MSG_NOSIGNAL | MSG_DONTWAIT);
-
-        if (n >= 0)
-            return n;
-        if (errno == EINTR)
-            continue;
-        if (errno == EAGAIN || errno == EWOULDBLOCK)
-            return 0;
-        return -errno;
-    }
-}
-
 static void conn_send_failed(struct wsg_tcp_conn *c, int err)
 {
     conn_kill(c, send_errno_is_peer_gone(err) ? NULL : strerror(err));
 }
 
-static void conn_enqueue(struct wsg_tcp_conn *c, const uint8_t *p, size_t len)
+/* After a send or a flush: watch EPOLLOUT while bytes wait; a client whose
+ * queue overflows is dropped rather than slowing anyone else down. */
+static void conn_sent(struct wsg_tcp_conn *c, int r)
 {
-    if (c->qlen + len > WSG_TCP_QUEUE_MAX) {
+    if (r == -ENOBUFS)
         conn_kill(c, "output queue over 64 KiB (client not reading)");
-        return;
-    }
-    if (c->qhead + c->qlen + len > WSG_TCP_QUEUE_MAX) {
-        memmove(c->queue, c->queue + c->qhead, c->qlen);
-        c->qhead = 0;
-    }
-    memcpy(c->queue + c->qhead + c->qlen, p, len);
-    c->qlen += len;
-    conn_set_events(c, c->events | EPOLLOUT);
+    else if (r < 0)
+        conn_send_failed(c, -r);
+    else if (r)
+        conn_set_events(c, c->events | EPOLLOUT);
+    else
+        conn_set_events(c, c->events & ~(uint32_t)EPOLLOUT);
 }
 
 /* The session's send callback: one packet. */
 static void conn_packet(struct wsg_session *s, const uint8_t *pkt, size_t len)
 {
     struct wsg_tcp_conn *c = s->ctx;
-    ssize_t n;
 
-    if (c->dead)
-        return;
-    /* Behind queued bytes a packet must wait its turn, or it would land in
-     * the middle of an earlier one. */
-    if (c->qlen > 0) {
-        conn_enqueue(c, pkt, len);
-        return;
-    }
-    n = conn_send(c, pkt, len);
-    if (n < 0) {
-        conn_send_failed(c, (int)-n);
-        return;
-    }
-    if ((size_t)n < len)
-        conn_enqueue(c, pkt + n, len - (size_t)n);
+    if (!c->dead)
+        conn_sent(c, wsg_outq_send(&c->out, c->watch.fd, pkt, len));
 }
 
 static void conn_flush(struct wsg_tcp_conn *c)
 {
-    ssize_t n;
-
-    if (c->dead || c->qlen == 0)
-        return;
-    /* The whole queue in one call: what the socket does not take now waits
-     * for the next EPOLLOUT. */
-    n = conn_send(c, c->queue + c->qhead, c->qlen);
-    if (n < 0) {
-        conn_send_failed(c, (int)-n);
-        return;
-    }
-    c->qhead += (size_t)n;
-    c->qlen -= (size_t)n;
-    if (c->qlen == 0) {
-        c->qhead = 0;
-        conn_set_events(c, c->events & ~(uint32_t)EPOLLOUT);
-    }
+    if (!c->dead)
+        conn_sent(c, wsg_outq_flush(&c->out, c->watch.fd));
 }
 
 static void conn_read(struct wsg_tcp_conn *c)
@@ -312,7 +264,8 @@ static void conn_accept(struct wsg_tcp *tcp, int fd,
         close(fd);
         return;
     }
-    memset(c, 0, offsetof(struct wsg_tcp_conn, queue));
+    memset(c, 0, offsetof(struct wsg_tcp_conn, out));
+    wsg_outq_init(&c->out, 1);
     /* Small replies must leave at once, not wait for Nagle. */
     if (setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one) < 0)
         fprintf(stderr, "wsgemu: tcp %s: TCP_NODELAY: %s\n", name,
@@ -515,18 +468,7 @@ static int tcp_open(struct wsg_transport *t,
 fail_errno:
     r = -errno;
 fail:
-    if (r == -EACCES && ep->port < 1024)
-        snprintf(err, errlen,
-                 "cannot listen on tcp %s: %s (ports below 1024 need root "
-                 "or CAP_NET_BIND_SERVICE; --tcp 127.0.0.1:PORT picks "
-                 "another)",
-                 where, strerror(-r));
-    else if (!step)
-        snprintf(err, errlen, "cannot listen on tcp %s: %s", where,
-                 strerror(-r));
-    else
-        snprintf(err, errlen, "cannot listen on tcp %s: %s: %s", where, step,
-                 strerror(-r));
+    wsg_transport_listen_error(err, errlen, "tcp", where, ep->port, step, r);
     if (tcp) {
         if (tcp->watch.fd >= 0)
             close(tcp->watch.fd);

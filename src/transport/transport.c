@@ -64,3 +64,20 @@ int wsg_transport_ready_line(const struct wsg_transport *ts, size_t n,
     }
     return 0;
 }
+
+void wsg_transport_listen_error(char *buf, size_t len, const char *proto,
+                                const char *where, uint16_t port,
+                                const char *step, int err)
+{
+    if (err == -EACCES && port < 1024 && !step)
+        snprintf(buf, len,
+                 "cannot listen on %s %s: %s (ports below 1024 need root or "
+                 "CAP_NET_BIND_SERVICE; --%s 127.0.0.1:PORT picks another)",
+                 proto, where, strerror(-err), proto);
+    else if (!step)
+        snprintf(buf, len, "cannot listen on %s %s: %s", proto, where,
+                 strerror(-err));
+    else
+        snprintf(buf, len, "cannot listen on %s %s: %s: %s", proto, where,
+                 step, strerror(-err));
+}

@@ -69,6 +69,13 @@ extern const struct wsg_transport_ops wsg_udp_ops;
 extern const struct wsg_transport_ops wsg_pty_ops;
 extern const struct wsg_transport_ops wsg_can_ops;
 
+/* The message for a socket that cannot listen on ADDR:PORT: the reason,
+ * the step that failed when it is not the bind (step NULL), and for a port
+ * below 1024 refused with EACCES, what to do about it. err is -errno. */
+void wsg_transport_listen_error(char *buf, size_t len, const char *proto,
+                                const char *where, uint16_t port,
+                                const char *step, int err);
+
 /* Route a tag to the transport that issued it. */
 struct wsg_session *wsg_transport_lookup(struct wsg_transport *ts, size_t n,
                                          uint32_t tag);

@@ -185,7 +185,7 @@ static int udp_open(struct wsg_transport *t,
     struct wsg_udp *udp;
     struct sockaddr_in sa;
     socklen_t salen = sizeof sa;
-    char ip[INET_ADDRSTRLEN];
+    char ip[INET_ADDRSTRLEN], where[WSG_UDP_ADDR_LEN];
     int r;
 
     memset(&sa, 0, sizeof sa);
@@ -224,15 +224,8 @@ static int udp_open(struct wsg_transport *t,
 fail_errno:
     r = -errno;
 fail:
-    if (r == -EACCES && ep->port < 1024)
-        snprintf(err, errlen,
-                 "cannot listen on udp %s:%u: %s (ports below 1024 need root "
-                 "or CAP_NET_BIND_SERVICE; --udp 127.0.0.1:PORT picks "
-                 "another)",
-                 ip, (unsigned)ep->port, strerror(-r));
-    else
-        snprintf(err, errlen, "cannot listen on udp %s:%u: %s", ip,
-                 (unsigned)ep->port, strerror(-r));
+    snprintf(where, sizeof where, "%s:%u", ip, (unsigned)ep->port);
+    wsg_transport_listen_error(err, errlen, "udp", where, ep->port, NULL, r);
     udp_close(t);
     return r;
 }

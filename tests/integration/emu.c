@@ -894,3 +894,38 @@ int emu_motions_answer(struct emu_client *c, int status)
     }
     return wrong;
 }
+
+/* Context switches and CPU ticks (user + system) of a process so far. */
+int emu_proc_activity(pid_t pid, long *switches, long *ticks)
+{
+    char path[64], line[256];
+    unsigned long ut = 0, st = 0;
+    long vol = -1, invol = -1;
+    FILE *f;
+
+    snprintf(path, sizeof path, "/proc/%d/status", (int)pid);
+    f = fopen(path, "r");
+    if (!f)
+        return -1;
+    while (fgets(line, sizeof line, f)) {
+        sscanf(line, "voluntary_ctxt_switches: %ld", &vol);
+        sscanf(line, "nonvoluntary_ctxt_switches: %ld", &invol);
+    }
+    fclose(f);
+    snprintf(path, sizeof path, "/proc/%d/stat", (int)pid);
+    f = fopen(path, "r");
+    if (!f)
+        return -1;
+    /* utime and stime are fields 14 and 15, after "(comm) state". */
+    if (!fgets(line, sizeof line, f) ||
+        sscanf(strrchr(line, ')') + 2,
+               "%*c %*d %*d %*d %*d %*d %*u %*u %*u %*u %*u %lu %lu", &ut,
+               &st) != 2)
+        vol = -1;
+    fclose(f);
+    if (vol < 0 || invol < 0)
+        return -1;
+    *switches = vol + invol;
+    *ticks = (long)(ut + st);
+    return 0;
+}

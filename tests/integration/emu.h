@@ -210,6 +210,10 @@ int emu_motions_answer(struct emu_client *c, int status);
 size_t emu_move_payload(uint8_t *out, uint8_t flags, float width, float speed);
 size_t emu_grasp_payload(uint8_t *out, float width, float speed);
 
+/* Context switches (voluntary and not) and CPU ticks (user + system) of a
+ * process so far, from /proc. 0 or -1. */
+int emu_proc_activity(pid_t pid, long *switches, long *ticks);
+
 /* Monotonic milliseconds. */
 double emu_now_ms(void);
 void emu_sleep_ms(int ms);

@@ -429,41 +429,6 @@ static void test_bad_options(const char *exe)
     bad_option(exe, a5);
 }
 
-/* Context switches and CPU ticks (user + system) of a process so far. */
-static int proc_activity(pid_t pid, long *switches, long *ticks)
-{
-    char path[64], line[256];
-    unsigned long ut = 0, st = 0;
-    long vol = -1, invol = -1;
-    FILE *f;
-
-    snprintf(path, sizeof path, "/proc/%d/status", (int)pid);
-    f = fopen(path, "r");
-    if (!f)
-        return -1;
-    while (fgets(line, sizeof line, f)) {
-        sscanf(line, "voluntary_ctxt_switches: %ld", &vol);
-        sscanf(line, "nonvoluntary_ctxt_switches: %ld", &invol);
-    }
-    fclose(f);
-    snprintf(path, sizeof path, "/proc/%d/stat", (int)pid);
-    f = fopen(path, "r");
-    if (!f)
-        return -1;
-    /* utime and stime are fields 14 and 15, after "(comm) state". */
-    if (!fgets(line, sizeof line, f) ||
-        sscanf(strrchr(line, ')') + 2,
-               "%*c %*d %*d %*d %*d %*d %*u %*u %*u %*u %*u %lu %lu", &ut,
-               &st) != 2)
-        vol = -1;
-    fclose(f);
-    if (vol < 0 || invol < 0)
-        return -1;
-    *switches = vol + invol;
-    *ticks = (long)(ut + st);
-    return 0;
-}
-
 /* An idle emulator (nothing moving, no stream, one client connected and
  * quiet) must not spin nor wake for model steps: over a second it is
  * scheduled a handful of times at most (a 1 ms step timer would make it
@@ -477,9 +442,9 @@ static void test_idle(struct emu *e)
     CHECK_EQ(emu_request(&c, WSG_CMD_GET_WIDTH, NULL, 0, NULL, EMU_REPLY_MS),
              WSG_E_SUCCESS);
     emu_sleep_ms(100);
-    REQUIRE(proc_activity(e->pid, &sw0, &t0) == 0);
+    REQUIRE(emu_proc_activity(e->pid, &sw0, &t0) == 0);
     emu_sleep_ms(1000);
-    REQUIRE(proc_activity(e->pid, &sw1, &t1) == 0);
+    REQUIRE(emu_proc_activity(e->pid, &sw1, &t1) == 0);
     CHECK(sw1 - sw0 <= 5);
     CHECK(t1 - t0 <= 2);
     emu_close(&c);

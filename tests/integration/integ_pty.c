@@ -46,41 +46,6 @@ static const char *pty_path(const struct emu *e, char *buf, size_t cap)
     return p;
 }
 
-/* Context switches and CPU ticks (user + system) of a process so far. */
-static int proc_activity(pid_t pid, long *switches, long *ticks)
-{
-    char path[64], line[256];
-    unsigned long ut = 0, st = 0;
-    long vol = -1, invol = -1;
-    FILE *f;
-
-    snprintf(path, sizeof path, "/proc/%d/status", (int)pid);
-    f = fopen(path, "r");
-    if (!f)
-        return -1;
-    while (fgets(line, sizeof line, f)) {
-        sscanf(line, "voluntary_ctxt_switches: %ld", &vol);
-        sscanf(line, "nonvoluntary_ctxt_switches: %ld", &invol);
-    }
-    fclose(f);
-    snprintf(path, sizeof path, "/proc/%d/stat", (int)pid);
-    f = fopen(path, "r");
-    if (!f)
-        return -1;
-    /* utime and stime are fields 14 and 15, after "(comm) state". */
-    if (!fgets(line, sizeof line, f) ||
-        sscanf(strrchr(line, ')') + 2,
-               "%*c %*d %*d %*d %*d %*d %*u %*u %*u %*u %*u %lu %lu", &ut,
-               &st) != 2)
-        vol = -1;
-    fclose(f);
-    if (vol < 0 || invol < 0)
-        return -1;
-    *switches = vol + invol;
-    *ticks = (long)(ut + st);
-    return 0;
-}
-
 /* Nobody has the port open: over a second the daemon is scheduled a
  * handful of times at most (a master polling HUP in the epoll set would
  * make it spin) and uses no CPU time worth a tick. */
@@ -89,9 +54,9 @@ static void check_idle(const struct emu *e, const char *when)
     long sw0, sw1, t0, t1;
 
     emu_sleep_ms(100);
-    REQUIRE(proc_activity(e->pid, &sw0, &t0) == 0);
+    REQUIRE(emu_proc_activity(e->pid, &sw0, &t0) == 0);
     emu_sleep_ms(1000);
-    REQUIRE(proc_activity(e->pid, &sw1, &t1) == 0);
+    REQUIRE(emu_proc_activity(e->pid, &sw1, &t1) == 0);
     printf("idle (%s): %ld switches, %ld ticks in 1 s\n", when, sw1 - sw0,
            t1 - t0);
     CHECK(sw1 - sw0 <= 5);
