@@ -1,0 +1,125 @@
+/*
+ * integ_together: every interface of one daemon at once (TCP, UDP and the
+ * serial port; CAN joins where this host has a vcan, the CAN runner covers
+ * it otherwise). They share one gripper: a motion started on one is seen
+ * moving from the others and refused there with E_ALREADY_RUNNING, and its
+ * final result goes to the interface and peer that sent it, nowhere else.
+ * The ready line names them all, in a fixed order.
+ */
+#include "check.h"
+#include "emu.h"
+#include "wsg/axis.h"
+
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#define N 3
+
+int main(int argc, char **argv)
+{
+    const char *exe = emu_exe(argc, argv);
+    const struct emu_transport *tps[N] = {&emu_tcp, &emu_udp, &emu_pty};
+    const char *args[16];
+    struct emu e;
+    struct emu_client c[N];
+    struct emu_frame f;
+    char v[128];
+    size_t n = 0;
+    int i, j, k;
+
+    /* The options of every transport: each one's daemon_args hook puts
+     * them into e.tp_argv, so collect them one after the other. */
+    memset(&e, 0, sizeof e);
+    e.tp_fd = -1;
+    {
+        static struct emu parts[N];
+        for (i = 0; i < N; i++) {
+            memset(&parts[i], 0, sizeof parts[i]);
+            parts[i].tp_fd = -1;
+            if (tps[i]->daemon_args) {
+                int r = tps[i]->daemon_args(&parts[i]);
+                if (r == 77)
+                    test_skip("an interface cannot run here");
+                REQUIRE(r == 0);
+                for (k = 0; parts[i].tp_argv[k]; k++)
+                    args[n++] = parts[i].tp_argv[k];
+            } else {
+                args[n++] = "--tcp";
+                args[n++] = "127.0.0.1:0";
+            }
+        }
+        args[n] = NULL;
+        REQUIRE(emu_start(&e, exe, args) == 0);
+        /* What the hooks reserved for their clients (UDP's reply port). */
+        for (i = 0; i < N; i++)
+            if (parts[i].tp_fd >= 0) {
+                e.tp_fd = parts[i].tp_fd;
+                e.tp_port = parts[i].tp_port;
+            }
+    }
+    printf("%s\n", e.line);
+    /* tcp=, udp=, pty= in this order, each once. */
+    {
+        const char *t = strstr(e.line, " tcp="), *u = strstr(e.line, " udp="),
+                   *p = strstr(e.line, " pty=");
+        CHECK(strncmp(e.line, "ready ", 6) == 0);
+        CHECK(t && u && p && t < u && u < p);
+    }
+    for (i = 0; i < N; i++) {
+        REQUIRE(emu_field(&e, tps[i]->field, v, sizeof v));
+        REQUIRE(emu_open(&c[i], &e, tps[i]) == 0);
+    }
+
+    /* A homing from each interface in turn: moving for all, refused on the
+     * others, its result only where it was sent. */
+    for (i = 0; i < N; i++) {
+        uint8_t dir = (uint8_t)(i % 2 ? WSG_HOME_NEGATIVE : WSG_HOME_POSITIVE);
+        unsigned before[N];
+        uint32_t fl;
+
+        for (j = 0; j < N; j++)
+            before[j] = c[j].seen[WSG_CMD_HOMING];
+        CHECK_EQ(
+            emu_request(&c[i], WSG_CMD_HOMING, &dir, 1, NULL, EMU_REPLY_MS),
+            WSG_E_CMD_PENDING);
+        for (j = 0; j < N; j++) {
+            if (j == i)
+                continue;
+            CHECK(emu_get_flags(&c[j], &fl) == 0);
+            if (!(fl & WSG_SF_MOVING))
+                continue; /* already home: nothing to refuse */
+            CHECK_EQ(emu_request(&c[j], WSG_CMD_HOMING, &dir, 1, NULL,
+                                 EMU_REPLY_MS),
+                     WSG_E_ALREADY_RUNNING);
+        }
+        CHECK_EQ(emu_recv_id(&c[i], WSG_CMD_HOMING, &f, 4000), 1);
+        CHECK_EQ(f.status, WSG_E_SUCCESS);
+        for (j = 0; j < N; j++) {
+            REQUIRE(emu_sync(&c[j], EMU_REPLY_MS) == 0);
+            if (j == i)
+                CHECK_EQ(c[j].seen[WSG_CMD_HOMING] - before[j], 2);
+            else /* at most its own E_ALREADY_RUNNING */
+                CHECK(c[j].seen[WSG_CMD_HOMING] - before[j] <= 1);
+        }
+    }
+    /* One gripper: the width the last homing left is everybody's. */
+    {
+        float w[N];
+        for (i = 0; i < N; i++)
+            CHECK(emu_get_float(&c[i], WSG_CMD_GET_WIDTH, &w[i]) == 0);
+        CHECK_NEAR(w[0], 110.0, 0.01); /* the last, from the pty: positive */
+        CHECK_NEAR(w[1], w[0], 1e-6);
+        CHECK_NEAR(w[2], w[0], 1e-6);
+    }
+    for (i = 0; i < N; i++) {
+        CHECK_EQ(c[i].bad, 0);
+        if (tps[i]->connection)
+            CHECK_EQ(emu_request(&c[i], WSG_CMD_DISCONNECT, NULL, 0, NULL,
+                                 EMU_REPLY_MS),
+                     WSG_E_SUCCESS);
+        emu_close(&c[i]);
+    }
+    CHECK_EQ(emu_stop(&e), 0);
+    TEST_EXIT();
+}
