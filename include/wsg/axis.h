@@ -214,6 +214,11 @@ void wsg_axis_clear_soft_limits(struct wsg_axis *ax);
 
 /* The world (control channel, tests). width < 0 removes the part. */
 void wsg_axis_set_part(struct wsg_axis *ax, double width, double stiffness);
+/* A rigid obstacle that blocks the fingers at width, moving either way;
+ * width < 0 removes it. */
+void wsg_axis_set_obstacle(struct wsg_axis *ax, double width);
+/* Inject or clear faults (WSG_FAULTS bits). A temperature, power or
+ * current fault stops a running motion (E_CMD_ABORTED) at the next step. */
 void wsg_axis_set_fault(struct wsg_axis *ax, uint32_t fault, int on);
 
 #endif

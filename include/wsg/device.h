@@ -46,7 +46,8 @@ typedef void (*wsg_send_fn)(struct wsg_session *s, const uint8_t *pkt,
 #define WSG_SESSION_CONNECTION 0x01u /* TCP: 07h available, close matters */
 
 struct wsg_session {
-    uint32_t tag; /* unique among live sessions; never 0 */
+    uint32_t tag;  /* unique among live sessions; never 0 */
+    char peer[64]; /* for logs: "tcp 127.0.0.1:51234", set by the transport */
     unsigned flags;
     int announced; /* got Disconnect Announcement (07h) */
     wsg_send_fn send;
@@ -69,6 +70,14 @@ struct wsg_device {
     size_t tag_len;           /* 0: no device tag set */
     int disconnect_fast_stop; /* TCP close without 07h: FAST STOP */
     int cmd_failure;          /* SF_CMD_FAILURE: last command failed */
+    /* Communication log (NULL: off): every packet received (a parsed frame,
+     * or a checksum or size error with its ID) and every packet sent, with
+     * the session it belongs to. */
+    void (*trace_in)(void *ctx, const struct wsg_session *s,
+                     const struct wsg_frame *f, enum wsg_parse_event ev);
+    void (*trace_out)(void *ctx, const struct wsg_session *s,
+                      const uint8_t *pkt, size_t len);
+    void *trace_ctx;
     /* Resolve a session tag for a final result; NULL when it is gone. */
     struct wsg_session *(*lookup)(void *ctx, uint32_t tag);
     void *lookup_ctx;

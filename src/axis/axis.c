@@ -700,6 +700,16 @@ void wsg_axis_set_part(struct wsg_axis *ax, double width, double stiffness)
     ax->part_stiffness = stiffness > 0 ? stiffness : ax->cfg.part_stiffness;
 }
 
+void wsg_axis_set_obstacle(struct wsg_axis *ax, double width)
+{
+    if (width < 0 || isnan(width)) {
+        ax->obstacle = 0;
+        return;
+    }
+    ax->obstacle = 1;
+    ax->obstacle_width = width;
+}
+
 void wsg_axis_set_fault(struct wsg_axis *ax, uint32_t fault, int on)
 {
     fault &= WSG_FAULTS;

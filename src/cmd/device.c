@@ -82,8 +82,11 @@ void wsg_device_reply(struct wsg_device *d, struct wsg_session *s, uint8_t id,
 
     if (status != WSG_E_CMD_PENDING)
         d->cmd_failure = status != WSG_E_SUCCESS;
-    if (n)
-        s->send(s, pkt, n);
+    if (!n)
+        return;
+    if (d->trace_out)
+        d->trace_out(d->trace_ctx, s, pkt, n);
+    s->send(s, pkt, n);
 }
 
 void wsg_device_input(struct wsg_device *d, struct wsg_session *s,
@@ -96,6 +99,8 @@ void wsg_device_input(struct wsg_device *d, struct wsg_session *s,
 
         data += n;
         len -= n;
+        if (ev != WSG_PARSE_NONE && d->trace_in)
+            d->trace_in(d->trace_ctx, s, &f, ev);
         switch (ev) {
         case WSG_PARSE_FRAME:
             wsg_device_dispatch(d, s, &f);
@@ -180,6 +185,8 @@ void wsg_device_poll_streams(struct wsg_device *d, struct wsg_session *s)
             st->due_us = now + st->period_us;
         n = wsg_frame_encode_reply(pkt, sizeof pkt, wsg_stream_cmd[i],
                                    WSG_E_SUCCESS, params, len);
+        if (d->trace_out)
+            d->trace_out(d->trace_ctx, s, pkt, n);
         s->send(s, pkt, n);
     }
 }

@@ -193,6 +193,11 @@ void wsg_options_defaults(struct wsg_options *o)
     o->udp.port = WSG_UDP_PORT_DEFAULT;
     o->udp_remote_port = WSG_UDP_REMOTE_DEFAULT;
     o->can_id = WSG_CAN_ID_DEFAULT;
+    o->control.addr[0] = 127;
+    o->control.addr[3] = 1;
+    o->time_scale = 1.0;
+    o->initial_part = -1.0;
+    o->serial = 1;
     o->check_crc = 1;
     o->disconnect_fast_stop = 1;
     o->step_us = WSG_STEP_US_DEFAULT;

@@ -31,13 +31,21 @@ struct wsg_options {
     int tcp_enabled;
     struct wsg_endpoint tcp;
     int udp_enabled;
-    struct wsg_endpoint udp;  /* where the emulator listens */
-    uint16_t udp_remote_port; /* where replies go, at the sender's IP */
-    const char *pty_path;     /* NULL: no serial port */
-    const char *can_iface;    /* NULL: no CAN */
-    uint16_t can_id;          /* commands on can_id, answers on can_id+1 */
-    int check_crc;            /* 0 with --no-crc */
-    int disconnect_fast_stop; /* 0 with --no-disconnect-fast-stop */
+    struct wsg_endpoint udp;     /* where the emulator listens */
+    uint16_t udp_remote_port;    /* where replies go, at the sender's IP */
+    const char *pty_path;        /* NULL: no serial port */
+    const char *can_iface;       /* NULL: no CAN */
+    uint16_t can_id;             /* commands on can_id, answers on can_id+1 */
+    int control_enabled;         /* --control given */
+    struct wsg_endpoint control; /* the control channel (loopback default) */
+    double time_scale;           /* simulated seconds per real second */
+    const char *log_path;        /* NULL: no log; "-": stderr */
+    const char *config_path;     /* --config FILE, read before the options */
+    double initial_part;         /* --part WIDTH; < 0: none */
+    uint32_t serial;             /* Get System Information SN */
+    const char *device_tag;      /* NULL: none */
+    int check_crc;               /* 0 with --no-crc */
+    int disconnect_fast_stop;    /* 0 with --no-disconnect-fast-stop */
     uint32_t step_us;
     const char *model;           /* NULL: the default model */
     struct wsg_axis_config axis; /* the model's config, step_us applied */
