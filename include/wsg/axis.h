@@ -81,6 +81,10 @@ struct wsg_axis_config {
     double clamp_travel;    /* mm: grasp clamping travel */
     double width_tolerance; /* mm: part width tolerance */
     double part_stiffness;  /* N/mm: default for a placed part */
+    double ambient;         /* degC: temperature at rest */
+    double temp_warning;    /* degC: SF_TEMP_WARNING at and above */
+    double temp_fault;      /* degC: SF_TEMP_FAULT at and above */
+    double heat_tau;        /* s: thermal time constant of the drive */
     int homing_dir;         /* WSG_HOME_POSITIVE or WSG_HOME_NEGATIVE */
     int force_sensor;       /* force measurement fingers fitted (tare) */
     uint32_t step_us;       /* fixed step length */
@@ -157,8 +161,11 @@ struct wsg_axis {
     /* The world: a part between the fingers. */
     int part;
     double part_width, part_stiffness;
-    uint32_t faults;    /* injected fault flags (WSG_FAULTS) */
-    double temperature; /* degC, reported by 46h */
+    int obstacle; /* something rigid stands in the way */
+    double obstacle_width;
+    uint32_t faults;         /* injected fault flags (WSG_FAULTS) */
+    uint32_t thermal_faults; /* TEMP_WARNING/TEMP_FAULT from the model */
+    double temperature;      /* degC, reported by 46h */
 
     /* Requests recorded by handlers, applied by the next step in order:
      * fast stop, acknowledge, stop, new motion. */
