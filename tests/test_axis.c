@@ -339,6 +339,183 @@ static void test_faults(void)
     CHECK_EQ(tdev_move(&t, 0, 60.0f, 100.0f), WSG_E_CMD_PENDING);
 }
 
+static void test_obstacle(void)
+{
+    struct tdev t;
+
+    tdev_init(&t);
+    CHECK_EQ(tdev_home(&t, 0), WSG_E_SUCCESS);
+    /* Rigid, either way: a closing move blocks at it, clamping with the
+     * force limit; an opening one from below blocks at it too. */
+    wsg_axis_set_obstacle(&t.dev.axis, 60.0);
+    CHECK_EQ(tdev_move(&t, 0, 20.0f, 100.0f), WSG_E_CMD_PENDING);
+    CHECK_EQ(tdev_final(&t, WSG_CMD_PREPOSITION, 4000), WSG_E_AXIS_BLOCKED);
+    CHECK_NEAR(t.dev.axis.width, 60.0, 1e-9);
+    CHECK_NEAR(tdev_getf(&t, WSG_CMD_GET_FORCE), 40.0, 1e-3);
+    CHECK(tdev_flags(&t) & WSG_SF_BLOCKED_MINUS);
+    CHECK(wsg_device_idle(&t.dev));
+    /* Taken away: the clamp snaps on to its target. */
+    wsg_axis_set_obstacle(&t.dev.axis, -1.0);
+    CHECK(!wsg_device_idle(&t.dev));
+    tdev_steps(&t, 3000);
+    CHECK_NEAR(t.dev.axis.width, 20.0, 1e-9);
+    wsg_axis_set_obstacle(&t.dev.axis, 50.0);
+    CHECK_EQ(tdev_move(&t, WSG_MOVE_STOP_ON_BLOCK, 90.0f, 100.0f),
+             WSG_E_CMD_PENDING);
+    CHECK_EQ(tdev_final(&t, WSG_CMD_PREPOSITION, 4000), WSG_E_AXIS_BLOCKED);
+    CHECK_NEAR(t.dev.axis.width, 50.0, 1e-9);
+    CHECK(tdev_flags(&t) & WSG_SF_BLOCKED_PLUS);
+    CHECK_EQ(tdev_getf(&t, WSG_CMD_GET_FORCE), 0.0f);
+    /* The nearest block counts: a part behind the obstacle is not felt. */
+    wsg_axis_set_part(&t.dev.axis, 30.0, 0);
+    CHECK_EQ(tdev_cmd2f(&t, WSG_CMD_GRASP, 30.0f, 100.0f), WSG_E_CMD_PENDING);
+    CHECK_EQ(tdev_final(&t, WSG_CMD_GRASP, 4000), WSG_E_CMD_FAILED);
+    CHECK_NEAR(t.dev.axis.width, 50.0, 1e-9); /* outside the window */
+}
+
+/* 3.2.1: homing into an obstacle takes the blocking position as origin,
+ * a wrong reference; homing again without it puts things right. */
+static void test_homing_into_obstacle(void)
+{
+    struct tdev t;
+
+    tdev_init(&t);
+    wsg_axis_set_obstacle(&t.dev.axis, 80.0);
+    CHECK_EQ(tdev_home(&t, 1), WSG_E_SUCCESS);
+    /* It believes it is open at 110 mm, 30 mm off. */
+    CHECK_NEAR(tdev_getf(&t, WSG_CMD_GET_WIDTH), 110.0, 1e-3);
+    wsg_axis_set_obstacle(&t.dev.axis, -1.0);
+    /* A part of 40 mm is met where the gripper believes 70 mm is. */
+    wsg_axis_set_part(&t.dev.axis, 40.0, 1e6);
+    CHECK_EQ(tdev_move(&t, WSG_MOVE_STOP_ON_BLOCK, 50.0f, 100.0f),
+             WSG_E_CMD_PENDING);
+    CHECK_EQ(tdev_final(&t, WSG_CMD_PREPOSITION, 4000), WSG_E_AXIS_BLOCKED);
+    CHECK_NEAR(tdev_getf(&t, WSG_CMD_GET_WIDTH), 70.0, 1e-3);
+    wsg_axis_set_part(&t.dev.axis, -1.0, 0);
+    /* Closing "to 10 mm" meets the real end stop where it believes 30 mm
+     * is: blocked there. */
+    CHECK_EQ(tdev_move(&t, 0, 10.0f, 100.0f), WSG_E_CMD_PENDING);
+    CHECK_EQ(tdev_final(&t, WSG_CMD_PREPOSITION, 4000), WSG_E_AXIS_BLOCKED);
+    CHECK_NEAR(tdev_getf(&t, WSG_CMD_GET_WIDTH), 30.0, 1e-3);
+    /* Homing again, nothing in the way: right again. */
+    CHECK_EQ(tdev_home(&t, 2), WSG_E_SUCCESS);
+    CHECK_NEAR(tdev_getf(&t, WSG_CMD_GET_WIDTH), 0.0, 1e-3);
+    CHECK_NEAR(t.dev.axis.ref_offset, 0.0, 1e-9);
+    CHECK_EQ(tdev_move(&t, 0, 40.0f, 100.0f), WSG_E_CMD_PENDING);
+    CHECK_EQ(tdev_final(&t, WSG_CMD_PREPOSITION, 4000), WSG_E_SUCCESS);
+}
+
+static void test_fault_consequences(void)
+{
+    struct tdev t;
+
+    /* A power fault during a motion: FAST STOP, the motion aborted,
+     * acknowledge needed once it is gone. */
+    tdev_init(&t);
+    CHECK_EQ(tdev_home(&t, 0), WSG_E_SUCCESS);
+    CHECK_EQ(tdev_move(&t, 0, 10.0f, 20.0f), WSG_E_CMD_PENDING);
+    tdev_steps(&t, 100);
+    wsg_axis_set_fault(&t.dev.axis, WSG_SF_POWER_FAULT, 1);
+    CHECK_EQ(tdev_final(&t, WSG_CMD_PREPOSITION, 10), WSG_E_CMD_ABORTED);
+    CHECK_EQ(tdev_flags(&t) & (WSG_SF_POWER_FAULT | WSG_SF_FAST_STOP),
+             WSG_SF_POWER_FAULT | WSG_SF_FAST_STOP);
+    wsg_axis_set_fault(&t.dev.axis, WSG_SF_POWER_FAULT, 0);
+    tdev_steps(&t, 1);
+    CHECK(tdev_flags(&t) & WSG_SF_FAST_STOP);
+    CHECK_EQ(tdev_move(&t, 0, 50.0f, 100.0f), WSG_E_ACCESS_DENIED);
+    CHECK_EQ(tdev_cmd(&t, WSG_CMD_ACK_FAST_STOP, "ack", 3), WSG_E_SUCCESS);
+    tdev_steps(&t, 1);
+    CHECK_EQ(tdev_move(&t, 0, 50.0f, 100.0f), WSG_E_CMD_PENDING);
+    CHECK_EQ(tdev_final(&t, WSG_CMD_PREPOSITION, 4000), WSG_E_SUCCESS);
+
+    /* A current fault as well. */
+    wsg_axis_set_fault(&t.dev.axis, WSG_SF_CURR_FAULT, 1);
+    tdev_steps(&t, 1);
+    CHECK(tdev_flags(&t) & WSG_SF_FAST_STOP);
+    wsg_axis_set_fault(&t.dev.axis, WSG_SF_CURR_FAULT, 0);
+    CHECK_EQ(tdev_cmd(&t, WSG_CMD_ACK_FAST_STOP, "ack", 3), WSG_E_SUCCESS);
+    tdev_steps(&t, 1);
+
+    /* A temperature fault: the motion and the grip end, movement refused
+     * until it clears; no FAST STOP, nothing to acknowledge. */
+    wsg_axis_set_part(&t.dev.axis, 30.0, 0);
+    CHECK_EQ(tdev_cmd2f(&t, WSG_CMD_GRASP, 30.0f, 100.0f), WSG_E_CMD_PENDING);
+    CHECK_EQ(tdev_final(&t, WSG_CMD_GRASP, 4000), WSG_E_SUCCESS);
+    wsg_axis_set_fault(&t.dev.axis, WSG_SF_TEMP_FAULT, 1);
+    tdev_steps(&t, 1);
+    CHECK_EQ(tdev_getf(&t, WSG_CMD_GET_FORCE), 0.0f);
+    CHECK_EQ(tdev_grasp_state(&t), WSG_GS_ERROR);
+    CHECK(!(tdev_flags(&t) & WSG_SF_FAST_STOP));
+    CHECK_EQ(tdev_cmd2f(&t, WSG_CMD_RELEASE, 60.0f, 100.0f),
+             WSG_E_ACCESS_DENIED);
+    wsg_axis_set_fault(&t.dev.axis, WSG_SF_TEMP_FAULT, 0);
+    CHECK_EQ(tdev_cmd2f(&t, WSG_CMD_RELEASE, 60.0f, 100.0f),
+             WSG_E_CMD_PENDING);
+    CHECK_EQ(tdev_final(&t, WSG_CMD_RELEASE, 4000), WSG_E_SUCCESS);
+    /* A finger fault refuses movement, stops nothing. */
+    wsg_axis_set_fault(&t.dev.axis, WSG_SF_FINGER_FAULT, 1);
+    tdev_steps(&t, 1);
+    CHECK_EQ(tdev_flags(&t) & (WSG_SF_FINGER_FAULT | WSG_SF_FAST_STOP),
+             WSG_SF_FINGER_FAULT);
+    CHECK_EQ(tdev_move(&t, 0, 50.0f, 100.0f), WSG_E_ACCESS_DENIED);
+}
+
+/* Overdrive heats the drive: holding at 120 N (1.5 times nominal) it
+ * settles towards 100 degC with a 60 s time constant: the warning at
+ * 65 degC after 60 ln(75/35) = 45.7 s, the fault at 75 degC after
+ * 60 ln(75/25) = 65.9 s. Relieved, it cools. */
+static void test_overheating(void)
+{
+    struct tdev t;
+    uint8_t on = 1;
+    long warn_ms = -1, fault_ms = -1, k;
+    int16_t t10;
+
+    tdev_init(&t);
+    CHECK_EQ(tdev_home(&t, 0), WSG_E_SUCCESS);
+    CHECK_EQ(tdev_cmd(&t, WSG_CMD_OVERDRIVE, &on, 1), WSG_E_SUCCESS);
+    CHECK_EQ(tdev_cmd1f(&t, WSG_CMD_SET_FORCE_LIMIT, 120.0f), WSG_E_SUCCESS);
+    wsg_axis_set_part(&t.dev.axis, 50.0, 0);
+    CHECK_EQ(tdev_cmd2f(&t, WSG_CMD_GRASP, 50.0f, 100.0f), WSG_E_CMD_PENDING);
+    CHECK_EQ(tdev_final(&t, WSG_CMD_GRASP, 4000), WSG_E_SUCCESS);
+    CHECK(!wsg_device_idle(&t.dev)); /* warming up */
+    for (k = 1; k <= 80000 && fault_ms < 0; k++) {
+        tdev_steps(&t, 1);
+        if (warn_ms < 0 && (wsg_axis_flags(&t.dev.axis) & WSG_SF_TEMP_WARNING))
+            warn_ms = k;
+        if (wsg_axis_flags(&t.dev.axis) & WSG_SF_TEMP_FAULT)
+            fault_ms = k;
+    }
+    printf("overdrive: warning after %ld ms, fault after %ld ms\n", warn_ms,
+           fault_ms);
+    CHECK_NEAR(warn_ms, 45700, 200);
+    CHECK_NEAR(fault_ms, 65900, 200);
+    CHECK_EQ(tdev_cmd(&t, WSG_CMD_GET_TEMPERATURE, NULL, 0), WSG_E_SUCCESS);
+    t10 = (int16_t)wsg_get_u16(tdev_last(&t)->params);
+    CHECK_NEAR(t10, 750, 2);
+    /* The fault turned the drive off: the grip is gone, and it cools. */
+    tdev_steps(&t, 1);
+    CHECK_EQ(tdev_getf(&t, WSG_CMD_GET_FORCE), 0.0f);
+    CHECK_EQ(tdev_cmd2f(&t, WSG_CMD_RELEASE, 60.0f, 100.0f),
+             WSG_E_ACCESS_DENIED);
+    /* Below 70 degC the fault clears (hysteresis), below 60 the warning. */
+    tdev_steps(&t, 60000);
+    CHECK(t.dev.axis.temperature < 60.0);
+    CHECK_EQ(tdev_flags(&t) & (WSG_SF_TEMP_WARNING | WSG_SF_TEMP_FAULT), 0);
+    CHECK_EQ(tdev_cmd2f(&t, WSG_CMD_RELEASE, 60.0f, 100.0f),
+             WSG_E_CMD_PENDING);
+    /* Holding at nominal force heats nothing. */
+    tdev_init(&t);
+    CHECK_EQ(tdev_home(&t, 0), WSG_E_SUCCESS);
+    CHECK_EQ(tdev_cmd1f(&t, WSG_CMD_SET_FORCE_LIMIT, 80.0f), WSG_E_SUCCESS);
+    wsg_axis_set_part(&t.dev.axis, 50.0, 0);
+    CHECK_EQ(tdev_cmd2f(&t, WSG_CMD_GRASP, 50.0f, 100.0f), WSG_E_CMD_PENDING);
+    CHECK_EQ(tdev_final(&t, WSG_CMD_GRASP, 4000), WSG_E_SUCCESS);
+    CHECK(wsg_device_idle(&t.dev));
+    tdev_steps(&t, 10000);
+    CHECK_NEAR(t.dev.axis.temperature, 25.0, 1e-9);
+}
+
 int main(void)
 {
     test_durations();
@@ -350,5 +527,9 @@ int main(void)
     test_soft_limits();
     test_overdrive();
     test_faults();
+    test_obstacle();
+    test_homing_into_obstacle();
+    test_fault_consequences();
+    test_overheating();
     TEST_EXIT();
 }

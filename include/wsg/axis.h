@@ -41,7 +41,8 @@
 #define WSG_FAULTS                                                            \
     (WSG_SF_TEMP_WARNING | WSG_SF_TEMP_FAULT | WSG_SF_POWER_FAULT |           \
      WSG_SF_CURR_FAULT | WSG_SF_FINGER_FAULT)
-/* Faults that disable every movement-related command. */
+/* Faults that disable every movement-related command (injected ones and
+ * the model's own temperature fault alike). */
 #define WSG_FAULTS_BLOCKING                                                   \
     (WSG_SF_TEMP_FAULT | WSG_SF_POWER_FAULT | WSG_SF_CURR_FAULT |             \
      WSG_SF_FINGER_FAULT)
@@ -125,7 +126,7 @@ struct wsg_motion {
     uint8_t cmd_id;
     uint32_t tag;
     double target;  /* where the profile ends */
-    double nominal; /* grasp: the part's nominal width */
+    double nominal; /* grasp: the part's nominal width; homing: +1/-1 */
     double speed;
     uint8_t move_flags; /* preposition flags */
     struct wsg_profile prof;
@@ -163,8 +164,11 @@ struct wsg_axis {
     double part_width, part_stiffness;
     int obstacle; /* something rigid stands in the way */
     double obstacle_width;
+    double ref_offset;       /* reported width - physical width: nonzero after
+                                homing into an obstacle */
     uint32_t faults;         /* injected fault flags (WSG_FAULTS) */
     uint32_t thermal_faults; /* TEMP_WARNING/TEMP_FAULT from the model */
+    uint32_t faults_seen;    /* faults whose consequences were applied */
     double temperature;      /* degC, reported by 46h */
 
     /* Requests recorded by handlers, applied by the next step in order:

@@ -23,6 +23,13 @@
 /* Widths closer than this are the same position (well below the 0.01 mm
  * change threshold of 43h). */
 #define WSG_AXIS_EPS 1e-6
+/* Thermal model: the drive settles towards ambient plus this many degC
+ * times (F/F_nom)^2 - 1 above nominal force, so that holding with the
+ * WSG 50's full overdrive force (1.5 times nominal) settles at ambient +
+ * 75 degC, past the fault level, and holding at nominal heats nothing. */
+#define WSG_AXIS_HEAT_GAIN 60.0
+/* The temperature flags clear this much below the level that set them. */
+#define WSG_AXIS_TEMP_HYSTERESIS 5.0
 
 struct wsg_axis_model {
     const char *name;
@@ -76,6 +83,10 @@ int wsg_axis_config_init(struct wsg_axis_config *cfg, const char *model)
     cfg->homing_dir = WSG_HOME_POSITIVE;
     cfg->force_sensor = 0;
     cfg->step_us = 1000;
+    cfg->ambient = 25.0;
+    cfg->temp_warning = 65.0;
+    cfg->temp_fault = 75.0;
+    cfg->heat_tau = 60.0;
     return 0;
 }
 
@@ -149,7 +160,7 @@ void wsg_axis_init(struct wsg_axis *ax, const struct wsg_axis_config *cfg,
     /* Power-up finger position is wherever they were left: mid-stroke. */
     ax->width = cfg->stroke / 2.0;
     ax->part_stiffness = cfg->part_stiffness;
-    ax->temperature = 25.0;
+    ax->temperature = cfg->ambient;
     wsg_axis_reset(ax);
 }
 
@@ -168,6 +179,7 @@ void wsg_axis_reset(struct wsg_axis *ax)
     ax->force_limit = ax->cfg.default_force;
     ax->overdrive = 0;
     ax->soft_limits = 0;
+    ax->faults_seen = 0; /* faults still present apply again */
     ax->req_fast_stop = ax->req_ack = ax->req_stop = 0;
     memset(&ax->req_motion, 0, sizeof ax->req_motion);
     memset(&ax->req_cancelled, 0, sizeof ax->req_cancelled);
@@ -182,24 +194,80 @@ static void wsg_axis_done(struct wsg_axis *ax, const struct wsg_motion *m,
         ax->on_done(ax->done_ctx, m->tag, m->cmd_id, status);
 }
 
-/* Where pushing with force f in direction dir blocks, if anything blocks
- * there: the part resists closing with its stiffness. */
+/* A position in the world (part, obstacle, end stops) as the gripper
+ * sees it: its reference is off by ref_offset after a homing that blocked
+ * on something before the end stop (3.2.1 warns of that). */
+static double wsg_axis_rep(const struct wsg_axis *ax, double phys)
+{
+    return phys + ax->ref_offset;
+}
+
+/* The next block in direction dir from the current width when pushing
+ * with force f: the part yields by f over its stiffness and resists
+ * closing only; the obstacle is rigid either way. Returns 0 when nothing
+ * but an end stop lies that way. */
+static int wsg_axis_next_block(const struct wsg_axis *ax, double dir, double f,
+                               double *x_block)
+{
+    double c[2];
+    int n = 0, i, found = 0;
+
+    if (dir < 0 && ax->part)
+        c[n++] = wsg_axis_rep(ax, ax->part_width) - f / ax->part_stiffness;
+    if (ax->obstacle)
+        c[n++] = wsg_axis_rep(ax, ax->obstacle_width);
+    for (i = 0; i < n; i++) {
+        if (dir < 0 ? c[i] > ax->width + WSG_AXIS_EPS
+                    : c[i] < ax->width - WSG_AXIS_EPS)
+            continue; /* behind the fingers */
+        if (!found || (dir < 0 ? c[i] > *x_block : c[i] < *x_block))
+            *x_block = c[i];
+        found = 1;
+    }
+    return found;
+}
+
+/* The mechanical end stop in direction dir, where the gripper sees it. */
+static double wsg_axis_end_stop(const struct wsg_axis *ax, double dir)
+{
+    return wsg_axis_rep(ax, dir < 0 ? 0.0 : ax->cfg.stroke);
+}
+
+/* Does a block still hold fingers that push in direction dir with force f
+ * at the current width, and where exactly (*x_block)? A part follows the
+ * fingers while it reaches them (it may grow or shrink); the obstacle and
+ * the end stop hold them only where they are. The nearest one counts. */
 static int wsg_axis_block_at(const struct wsg_axis *ax, double dir, double f,
                              double *x_block)
 {
-    if (dir < 0 && ax->part &&
-        ax->width >= ax->part_width - f / ax->part_stiffness - WSG_AXIS_EPS) {
-        *x_block = ax->part_width - f / ax->part_stiffness;
-        return 1;
+    double c[3];
+    int n = 0, i, found = 0;
+
+    if (dir < 0 && ax->part) {
+        double p = wsg_axis_rep(ax, ax->part_width) - f / ax->part_stiffness;
+        if (ax->width >= p - WSG_AXIS_EPS)
+            c[n++] = p;
     }
-    return 0;
+    if (ax->obstacle &&
+        fabs(ax->width - wsg_axis_rep(ax, ax->obstacle_width)) <= WSG_AXIS_EPS)
+        c[n++] = wsg_axis_rep(ax, ax->obstacle_width);
+    if (fabs(ax->width - wsg_axis_end_stop(ax, dir)) <= WSG_AXIS_EPS)
+        c[n++] = wsg_axis_end_stop(ax, dir);
+    for (i = 0; i < n; i++) {
+        if (!found || (dir < 0 ? c[i] > *x_block : c[i] < *x_block))
+            *x_block = c[i];
+        found = 1;
+    }
+    return found;
 }
 
 /* The contact force at width x while closing. */
 static double wsg_axis_contact_force(const struct wsg_axis *ax, double x)
 {
-    if (ax->part && x < ax->part_width)
-        return ax->part_stiffness * (ax->part_width - x);
+    double p = wsg_axis_rep(ax, ax->part_width);
+
+    if (ax->part && x < p)
+        return ax->part_stiffness * (p - x);
     return 0.0;
 }
 
@@ -270,13 +338,18 @@ static void wsg_axis_blocked(struct wsg_axis *ax)
     memset(&ax->motion, 0, sizeof ax->motion);
     ax->speed = 0.0;
     switch (m.kind) {
-    case WSG_MOTION_HOMING:
-        /* The blocking position is the new origin (3.2.1). */
+    case WSG_MOTION_HOMING: {
+        /* The blocking position is the new origin (3.2.1): right at the
+         * end stop, wrong by as much as an obstacle stood before it. */
+        double home = m.nominal > 0 ? ax->cfg.stroke : 0.0;
+        ax->ref_offset += home - ax->width;
+        ax->width = home;
         ax->referenced = 1;
         ax->force = 0.0;
         ax->grasp_state = WSG_GS_IDLE;
         wsg_axis_done(ax, &m, WSG_E_SUCCESS);
         break;
+    }
     case WSG_MOTION_MOVE:
         ax->grasp_state = WSG_GS_IDLE;
         if (m.move_flags & WSG_MOVE_STOP_ON_BLOCK)
@@ -321,11 +394,6 @@ static void wsg_axis_arrived(struct wsg_axis *ax)
 
     wsg_axis_halt(ax);
     switch (m.kind) {
-    case WSG_MOTION_HOMING:
-        ax->referenced = 1;
-        ax->grasp_state = WSG_GS_IDLE;
-        wsg_axis_done(ax, &m, WSG_E_SUCCESS);
-        break;
     case WSG_MOTION_MOVE:
     case WSG_MOTION_RELEASE:
         ax->grasp_state = WSG_GS_IDLE;
@@ -344,6 +412,17 @@ static void wsg_axis_arrived(struct wsg_axis *ax)
     }
 }
 
+/* Stop the fastest way, motor off; only an acknowledge clears it. */
+static void wsg_axis_fast_stop(struct wsg_axis *ax)
+{
+    struct wsg_motion m = ax->motion;
+
+    wsg_axis_halt(ax);
+    ax->fast_stop = 1;
+    ax->grasp_state = WSG_GS_ERROR;
+    wsg_axis_done(ax, &m, WSG_E_CMD_ABORTED);
+}
+
 static void wsg_axis_apply_requests(struct wsg_axis *ax)
 {
     if (ax->req_cancelled.kind != WSG_MOTION_NONE) {
@@ -351,12 +430,8 @@ static void wsg_axis_apply_requests(struct wsg_axis *ax)
         memset(&ax->req_cancelled, 0, sizeof ax->req_cancelled);
     }
     if (ax->req_fast_stop) {
-        struct wsg_motion m = ax->motion;
         ax->req_fast_stop = 0;
-        wsg_axis_halt(ax);
-        ax->fast_stop = 1;
-        ax->grasp_state = WSG_GS_ERROR;
-        wsg_axis_done(ax, &m, WSG_E_CMD_ABORTED);
+        wsg_axis_fast_stop(ax);
     }
     if (ax->req_ack) {
         ax->req_ack = 0;
@@ -410,36 +485,36 @@ static int wsg_axis_soft_limit_hit(struct wsg_axis *ax, double x, double v)
 static void wsg_axis_advance(struct wsg_axis *ax, double dt)
 {
     struct wsg_motion *m = &ax->motion;
-    double x, v, x_block;
+    /* Homing's direction is its own: a homing that starts at its end stop
+     * has a profile of length 0, with no direction to speak of. */
+    double dir = m->kind == WSG_MOTION_HOMING ? m->nominal : m->prof.dir;
+    double x, v, x_block = 0.0, end;
+    double f = m->kind == WSG_MOTION_SNAP ? ax->clamp_force : ax->force_limit;
     int over;
 
     m->prof.t += dt;
     over = wsg_profile_eval(&m->prof, &x, &v);
     if (wsg_axis_soft_limit_hit(ax, x, v))
         return;
-    if (m->kind == WSG_MOTION_HOMING) {
-        /* Homing ends at the mechanical end stop or whatever is before it. */
-        if (v < 0 && ax->part && x <= ax->part_width) {
-            ax->width = ax->part_width;
-            wsg_axis_blocked(ax);
-            return;
-        }
-        ax->width = x;
-        ax->speed = v;
-        if (over)
-            wsg_axis_blocked(ax);
+    /* The part, the obstacle: the first one the fingers reach blocks them
+     * where the force limit is reached. */
+    if (wsg_axis_next_block(ax, dir, f, &x_block) &&
+        (dir < 0 ? x <= x_block + WSG_AXIS_EPS
+                 : x >= x_block - WSG_AXIS_EPS)) {
+        ax->width = x_block;
+        ax->force = m->kind == WSG_MOTION_HOMING ? 0.0 : f;
+        wsg_axis_blocked(ax);
         return;
     }
-    if (m->prof.dir < 0 && ax->part) {
-        double f =
-            m->kind == WSG_MOTION_SNAP ? ax->clamp_force : ax->force_limit;
-        x_block = ax->part_width - f / ax->part_stiffness;
-        if (x <= x_block + WSG_AXIS_EPS) {
-            ax->width = x_block;
-            ax->force = f;
-            wsg_axis_blocked(ax);
-            return;
-        }
+    /* The mechanical end stop: homing's goal; any other motion only meets
+     * it when a wrong reference put its target beyond it. */
+    end = wsg_axis_end_stop(ax, dir);
+    if ((m->kind == WSG_MOTION_HOMING && over) ||
+        (dir < 0 ? x < end - WSG_AXIS_EPS : x > end + WSG_AXIS_EPS)) {
+        ax->width = end;
+        ax->force = m->kind == WSG_MOTION_HOMING ? 0.0 : f;
+        wsg_axis_blocked(ax);
+        return;
     }
     ax->width = x;
     ax->speed = v;
@@ -473,16 +548,66 @@ static void wsg_axis_hold(struct wsg_axis *ax)
     ax->clamping = 0;
 }
 
+/* Faults newly present have their consequences (Appendix B): a power or
+ * current fault is a severe error, a FAST STOP to be acknowledged; a
+ * temperature fault turns the power electronics off: the motion ends, the
+ * grip goes, and movement stays refused until the fault clears. */
+static void wsg_axis_apply_faults(struct wsg_axis *ax)
+{
+    uint32_t all = ax->faults | ax->thermal_faults;
+    uint32_t fresh = all & ~ax->faults_seen;
+
+    ax->faults_seen = all;
+    if (fresh & (WSG_SF_POWER_FAULT | WSG_SF_CURR_FAULT)) {
+        wsg_axis_fast_stop(ax);
+    } else if (fresh & WSG_SF_TEMP_FAULT) {
+        struct wsg_motion m = ax->motion;
+        wsg_axis_halt(ax);
+        ax->grasp_state = WSG_GS_ERROR;
+        wsg_axis_done(ax, &m, WSG_E_CMD_ABORTED);
+    }
+}
+
+/* Where the drive's temperature settles at the present force. */
+static double wsg_axis_heat_target(const struct wsg_axis *ax)
+{
+    double r = ax->force / ax->cfg.nom_force;
+
+    return ax->cfg.ambient +
+           (r > 1.0 ? WSG_AXIS_HEAT_GAIN * (r * r - 1.0) : 0.0);
+}
+
+static void wsg_axis_thermal(struct wsg_axis *ax, double dt)
+{
+    double t;
+    uint32_t f = ax->thermal_faults;
+
+    ax->temperature +=
+        (wsg_axis_heat_target(ax) - ax->temperature) * (dt / ax->cfg.heat_tau);
+    t = ax->temperature;
+    if (t >= ax->cfg.temp_warning)
+        f |= WSG_SF_TEMP_WARNING;
+    else if (t < ax->cfg.temp_warning - WSG_AXIS_TEMP_HYSTERESIS)
+        f &= ~(uint32_t)WSG_SF_TEMP_WARNING;
+    if (t >= ax->cfg.temp_fault)
+        f |= WSG_SF_TEMP_FAULT;
+    else if (t < ax->cfg.temp_fault - WSG_AXIS_TEMP_HYSTERESIS)
+        f &= ~(uint32_t)WSG_SF_TEMP_FAULT;
+    ax->thermal_faults = f;
+}
+
 void wsg_axis_step(struct wsg_axis *ax)
 {
     double dt = ax->cfg.step_us * 1e-6;
 
     ax->time_us += ax->cfg.step_us;
     wsg_axis_apply_requests(ax);
+    wsg_axis_apply_faults(ax);
     if (ax->motion.kind != WSG_MOTION_NONE)
         wsg_axis_advance(ax, dt);
     else if (ax->clamping)
         wsg_axis_hold(ax);
+    wsg_axis_thermal(ax, dt);
 }
 
 int wsg_axis_idle(const struct wsg_axis *ax)
@@ -497,12 +622,16 @@ int wsg_axis_idle(const struct wsg_axis *ax)
         (!wsg_axis_block_at(ax, ax->clamp_dir, ax->clamp_force, &x_block) ||
          fabs(x_block - ax->width) > WSG_AXIS_EPS))
         return 0;
+    /* Faults to apply, a drive still warming or cooling. */
+    if ((ax->faults | ax->thermal_faults) != ax->faults_seen ||
+        fabs(wsg_axis_heat_target(ax) - ax->temperature) > 0.01)
+        return 0;
     return 1;
 }
 
 uint32_t wsg_axis_flags(const struct wsg_axis *ax)
 {
-    uint32_t f = ax->event_flags | ax->faults;
+    uint32_t f = ax->event_flags | ax->faults | ax->thermal_faults;
 
     if (ax->referenced)
         f |= WSG_SF_REFERENCED;
@@ -561,14 +690,17 @@ static int wsg_axis_outside_soft_limits(const struct wsg_axis *ax, double w)
 uint16_t wsg_axis_request_homing(struct wsg_axis *ax, int dir, uint32_t tag)
 {
     double target;
+    uint16_t st;
 
     if (dir == WSG_HOME_DEFAULT)
         dir = ax->cfg.homing_dir;
     if (dir != WSG_HOME_POSITIVE && dir != WSG_HOME_NEGATIVE)
         return WSG_E_INVALID_PARAMETER;
-    target = dir == WSG_HOME_POSITIVE ? ax->cfg.stroke : 0.0;
-    return wsg_axis_request(ax, WSG_MOTION_HOMING, WSG_CMD_HOMING, target,
-                            ax->cfg.homing_speed, tag);
+    target = wsg_axis_end_stop(ax, dir == WSG_HOME_POSITIVE ? 1.0 : -1.0);
+    st = wsg_axis_request(ax, WSG_MOTION_HOMING, WSG_CMD_HOMING, target,
+                          ax->cfg.homing_speed, tag);
+    ax->req_motion.nominal = dir == WSG_HOME_POSITIVE ? 1.0 : -1.0;
+    return st;
 }
 
 uint16_t wsg_axis_request_move(struct wsg_axis *ax, uint8_t flags,

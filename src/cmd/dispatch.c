@@ -30,7 +30,7 @@ static uint16_t wsg_cmd_check(const struct wsg_device *d,
         if (wsg_axis_fast_stopped(ax))
             return WSG_E_ACCESS_DENIED;
         /* Appendix B: a fault disables all movement-related commands. */
-        if (ax->faults & WSG_FAULTS_BLOCKING)
+        if ((ax->faults | ax->thermal_faults) & WSG_FAULTS_BLOCKING)
             return WSG_E_ACCESS_DENIED;
     }
     if ((c->flags & WSG_CMDF_HOMED) && !ax->referenced)
