@@ -1,0 +1,390 @@
+/*
+ * integ_wsgctl: the command-line client against the real daemon, run as a
+ * child process the way a person or a shell script runs it; only its
+ * stdout, stderr and exit status are checked.
+ *
+ * The daemon serves TCP, UDP and (where there are pseudo-terminals) a pty
+ * at once, so one gripper sees every interface:
+ * - --help, usage errors (exit 2), no emulator listening (exit 3);
+ * - over TCP: home then width, move, grasp with no part (exit 1,
+ *   E_CMD_FAILED on stderr), release, state, info, raw with bytes, a float
+ *   and a string, raw with an unknown ID, watch --count, watch ended by
+ *   SIGINT (exit 0);
+ * - decode of the manual's example packets in its own notation, split
+ *   across lines and with commas, and with a flipped checksum (exit 1);
+ * - one command each over UDP and over the serial pty;
+ * - at the end the gripper is not in FAST STOP: every wsgctl close over
+ *   TCP was announced with 07h.
+ *
+ * argv[1] is the daemon; the client's path comes from $WSGCTL (set by
+ * CMake) or argv[2].
+ */
+#define _GNU_SOURCE /* mkdtemp, posix_openpt */
+
+#include "check.h"
+#include "emu.h"
+#include "wsg/axis.h"
+
+#include <arpa/inet.h>
+#include <fcntl.h>
+#include <netinet/in.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#define RUN_MS 15000
+
+struct env {
+    const char *ctl;
+    char tcp[160];  /* HOST:PORT of the daemon */
+    char udp[160];  /* HOST:PORT:LOCAL for wsgctl */
+    char pty[160];  /* "" without pseudo-terminals */
+    char out[8192]; /* last run's stdout */
+    char err[4096]; /* last run's stderr */
+};
+
+/* A port nobody uses right now (bound, then released). */
+static unsigned free_port(int type)
+{
+    struct sockaddr_in sa;
+    socklen_t len = sizeof sa;
+    int fd = socket(AF_INET, type, 0);
+    unsigned port = 0;
+
+    REQUIRE(fd >= 0);
+    memset(&sa, 0, sizeof sa);
+    sa.sin_family = AF_INET;
+    sa.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    if (bind(fd, (struct sockaddr *)&sa, sizeof sa) == 0 &&
+        getsockname(fd, (struct sockaddr *)&sa, &len) == 0)
+        port = ntohs(sa.sin_port);
+    close(fd);
+    REQUIRE(port != 0);
+    return port;
+}
+
+/* Run wsgctl with the interface options (iface, addr; iface NULL: none)
+ * and the rest; stdout and stderr into v. Returns the exit status. */
+static int ctl(struct env *v, const char *iface, const char *addr, ...)
+{
+    const char *args[32];
+    int n = 0, rc;
+    va_list ap;
+
+    if (iface) {
+        args[n++] = iface;
+        args[n++] = addr;
+    }
+    va_start(ap, addr);
+    for (const char *a; (a = va_arg(ap, const char *)) != NULL && n < 31;)
+        args[n++] = a;
+    va_end(ap);
+    args[n] = NULL;
+    rc = emu_run(v->ctl, args, RUN_MS, v->out, sizeof v->out, v->err,
+                 sizeof v->err);
+    printf("$ wsgctl");
+    for (int i = 0; i < n; i++)
+        printf(" %s", args[i]);
+    printf("  -> %d\n%s", rc, v->out);
+    if (v->err[0])
+        printf("[stderr] %s", v->err);
+    return rc;
+}
+
+#define TCP(v, ...) ctl((v), "--tcp", (v)->tcp, __VA_ARGS__, (char *)NULL)
+
+/* A shell pipeline (for stdin): sh -c CMD, with $WSGCTL set. */
+static int shell(struct env *v, const char *cmd)
+{
+    const char *args[] = {"-c", cmd, NULL};
+    int rc;
+
+    setenv("WSGCTL", v->ctl, 1);
+    rc = emu_run("/bin/sh", args, RUN_MS, v->out, sizeof v->out, v->err,
+                 sizeof v->err);
+    printf("$ %s  -> %d\n%s", cmd, rc, v->out);
+    if (v->err[0])
+        printf("[stderr] %s", v->err);
+    return rc;
+}
+
+static int has(const char *hay, const char *needle)
+{
+    return strstr(hay, needle) != NULL;
+}
+
+static int count_lines(const char *s)
+{
+    int n = 0;
+
+    for (; *s; s++)
+        n += *s == '\n';
+    return n;
+}
+
+static void test_usage(struct env *v)
+{
+    CHECK_EQ(ctl(v, NULL, NULL, "--help", (char *)NULL), 0);
+    CHECK(has(v->out, "watch") && has(v->out, "raw") &&
+          has(v->out, "decode") && has(v->out, "Exit status"));
+    CHECK_EQ(ctl(v, NULL, NULL, (char *)NULL), 2);
+    CHECK_EQ(TCP(v, "frobnicate"), 2);
+    CHECK(has(v->err, "unknown command"));
+    CHECK_EQ(TCP(v, "move", "10"), 2);
+    CHECK_EQ(TCP(v, "move", "ten", "20"), 2);
+    CHECK_EQ(TCP(v, "home", "sideways"), 2);
+    CHECK_EQ(TCP(v, "raw", "0x06", "bareword"), 2);
+    CHECK_EQ(TCP(v, "raw", "300"), 2);
+    CHECK_EQ(TCP(v, "--timeout", "soon", "width"), 2);
+    CHECK_EQ(ctl(v, "--udp", "nohostport", "width", (char *)NULL), 2);
+}
+
+static void test_no_emulator(struct env *v)
+{
+    char addr[64];
+
+    snprintf(addr, sizeof addr, "127.0.0.1:%u", free_port(SOCK_STREAM));
+    CHECK_EQ(ctl(v, "--tcp", addr, "width", (char *)NULL), 3);
+    CHECK(has(v->err, "connect"));
+    /* UDP has no connection: the missing answer is the error. */
+    snprintf(addr, sizeof addr, "127.0.0.1:%u:%u", free_port(SOCK_DGRAM),
+             free_port(SOCK_DGRAM));
+    CHECK_EQ(ctl(v, "--udp", addr, "--timeout", "0.5", "width", (char *)NULL),
+             3);
+    CHECK(has(v->err, "no answer"));
+}
+
+static void test_tcp(struct env *v)
+{
+    CHECK_EQ(TCP(v, "home"), 0);
+    CHECK_EQ(v->out[0], '\0'); /* acting commands print nothing */
+    CHECK_EQ(TCP(v, "width"), 0);
+    CHECK(!strcmp(v->out, "width 110.00 mm\n"));
+    CHECK_EQ(TCP(v, "-q", "width"), 0);
+    CHECK(!strcmp(v->out, "110.00\n"));
+
+    CHECK_EQ(TCP(v, "move", "40", "100"), 0);
+    CHECK_EQ(TCP(v, "-q", "width"), 0);
+    CHECK(!strcmp(v->out, "40.00\n"));
+    CHECK_EQ(TCP(v, "move", "--relative", "10", "100"), 0);
+    CHECK_EQ(TCP(v, "-q", "width"), 0);
+    CHECK(!strcmp(v->out, "50.00\n"));
+
+    /* No part between the fingers. */
+    CHECK_EQ(TCP(v, "grasp", "20", "50"), 1);
+    CHECK(has(v->err, "E_CMD_FAILED"));
+    CHECK_EQ(TCP(v, "state"), 0);
+    /* SF_CMD_FAILURE is gone: the 07h of the grasp's close succeeded. */
+    CHECK(has(v->out, "state 0x00000001 SF_REFERENCED\n"));
+    CHECK(has(v->out, "grasp 2 NO_PART"));
+    CHECK_EQ(TCP(v, "-q", "stats"), 0);
+    CHECK(!strcmp(v->out, "1 1 0\n"));
+
+    CHECK_EQ(TCP(v, "release", "60", "50"), 0);
+    CHECK_EQ(TCP(v, "width"), 0);
+    CHECK(!strcmp(v->out, "width 60.00 mm\n"));
+    CHECK_EQ(TCP(v, "state"), 0);
+    CHECK(
+        has(v->out, "state 0x00000081 SF_REFERENCED SF_TARGET_POS_REACHED\n"));
+    CHECK(has(v->out, "grasp 0 IDLE\n"));
+    CHECK(!has(v->out, "SF_FAST_STOP"));
+
+    CHECK_EQ(TCP(v, "info"), 0);
+    CHECK(has(v->out, "type 1 (WSG 50)") && has(v->out, "firmware 2.2.0"));
+    CHECK_EQ(TCP(v, "limits"), 0);
+    CHECK(has(v->out, "stroke 110.00 mm"));
+
+    CHECK_EQ(TCP(v, "tag"), 0);
+    CHECK(!strcmp(v->out, "tag none\n"));
+    CHECK_EQ(TCP(v, "tag", "bench-1"), 0);
+    CHECK_EQ(TCP(v, "-q", "tag"), 0);
+    CHECK(!strcmp(v->out, "bench-1\n"));
+    CHECK_EQ(TCP(v, "force-limit", "30"), 0);
+    CHECK_EQ(TCP(v, "force-limit"), 0);
+    CHECK(!strcmp(v->out, "force-limit 30.00 N\n"));
+    CHECK_EQ(TCP(v, "soft-limits", "5", "100"), 0);
+    CHECK_EQ(TCP(v, "soft-limits"), 0);
+    CHECK(!strcmp(v->out, "soft-limits minus 5.00 mm plus 100.00 mm\n"));
+    CHECK_EQ(TCP(v, "soft-limits", "clear"), 0);
+    CHECK_EQ(TCP(v, "-q", "soft-limits"), 0);
+    CHECK(!strcmp(v->out, "none\n"));
+    CHECK_EQ(TCP(v, "temperature"), 0);
+    CHECK(!strcmp(v->out, "temperature 25.0 degC\n"));
+    CHECK_EQ(TCP(v, "loop", "hello"), 0);
+    CHECK(!strcmp(v->out, "hello\n"));
+    CHECK_EQ(TCP(v, "tare"), 1); /* no force measurement fingers */
+    CHECK(has(v->err, "E_NOT_AVAILABLE"));
+}
+
+static void test_raw(struct env *v)
+{
+    /* The command editor's example: a byte and the float 150.0f. */
+    CHECK_EQ(TCP(v, "raw", "0x06", "0x01", "150.0f"), 0);
+    CHECK(has(v->out, "06h Loop: E_SUCCESS\n"));
+    CHECK(has(v->out, "params (5): 01 00 00 16 43\n"));
+    CHECK_EQ(TCP(v, "raw", "6", "\"abc\"", "32"), 0);
+    CHECK(has(v->out, "params (4): 61 62 63 20\n"));
+    /* Known IDs come with their values. */
+    CHECK_EQ(TCP(v, "raw", "0x43"), 0);
+    CHECK(has(v->out, "params (4): 00 00 70 42\n"));
+    CHECK(has(v->out, "width 60.00 mm\n"));
+    /* A motion: pending, then the final result. */
+    CHECK_EQ(TCP(v, "raw", "0x21", "0", "55.0f", "100.0f"), 0);
+    CHECK(has(v->out, "E_CMD_PENDING") && has(v->out, ": E_SUCCESS"));
+    CHECK_EQ(TCP(v, "raw", "0x90"), 1);
+    CHECK(has(v->out, "E_CMD_UNKNOWN") && has(v->err, "E_CMD_UNKNOWN"));
+}
+
+static void test_decode(struct env *v)
+{
+    /* Chapter 1's examples as the manual prints them, split over lines. */
+    CHECK_EQ(shell(v, "printf 'AAh AAh AAh 01h 00h 00h E8h 10h\\n"
+                      "AAh AAh AAh 01h 02h 00h 12h 34h 6Dh 66h "
+                      "AAh AAh AAh 20h\\n02h 00h 00h 00h B3h FDh\\n"
+                      "AAh AAh AAh 90h 02h 00h 0Eh 00h FDh 02h\\n"
+                      "AAh AAh AAh 21h 02h 00h 1Ah 00h 67h CBh\\n' | "
+                      "\"$WSGCTL\" decode"),
+             0);
+    CHECK_EQ(count_lines(v->out), 5);
+    CHECK(has(v->out, "01h (unknown ID) SIZE 0 payload checksum E8 10 ok"));
+    CHECK(has(v->out, "20h Homing SIZE 2 status E_SUCCESS payload 00 00 "
+                      "checksum B3 FD ok"));
+    CHECK(has(v->out, "90h (unknown ID) SIZE 2 status E_CMD_UNKNOWN"));
+    CHECK(has(v->out, "status E_CMD_PENDING"));
+    /* The Get Acceleration reply as it really is (see NOTES), with commas
+     * and 0x: the values are decoded. */
+    CHECK_EQ(shell(v, "echo '0xAA,0xAA,0xAA,0x31,0x06,0x00,0x00,0x00,"
+                      "0x00,0x00,0x16,0x43,0x1C,0xAF' | \"$WSGCTL\" decode"),
+             0);
+    CHECK(has(v->out, "acceleration 150.00 mm/s2"));
+    /* A flipped checksum. */
+    CHECK_EQ(shell(v, "echo 'AA AA AA 20 02 00 00 00 FD B3' | "
+                      "\"$WSGCTL\" decode"),
+             1);
+    CHECK(has(v->out, "20h Homing") && has(v->out, "checksum FD B3 bad"));
+    CHECK_EQ(shell(v, "echo 'AA AA AA 20 02 00 00' | \"$WSGCTL\" decode"), 1);
+    CHECK(has(v->out, "incomplete"));
+    CHECK_EQ(shell(v, "echo 'AA AA zz' | \"$WSGCTL\" decode"), 2);
+}
+
+static void test_watch(struct env *v)
+{
+    char line[64];
+
+    CHECK_EQ(TCP(v, "watch", "width", "20", "--count", "3"), 0);
+    CHECK_EQ(count_lines(v->out), 3);
+    /* "HH:MM:SS.mmm width 55.00 mm" */
+    for (const char *p = v->out; *p; p = strchr(p, '\n') + 1) {
+        unsigned h, m, s, ms;
+        CHECK(sscanf(p, "%2u:%2u:%2u.%3u width 55.00 m%63s", &h, &m, &s, &ms,
+                     line) == 5);
+    }
+    CHECK_EQ(TCP(v, "-q", "watch", "grasp", "--count", "2"), 0);
+    CHECK_EQ(count_lines(v->out), 2);
+    CHECK(has(v->out, " IDLE\n"));
+    /* Until interrupted: SIGINT ends it with status 0. */
+    CHECK_EQ(shell(v, "\"$WSGCTL\" --tcp $TCP watch state 50 & p=$!; "
+                      "sleep 0.6; kill -INT $p; wait $p"),
+             0);
+    CHECK(count_lines(v->out) >= 2);
+    CHECK(has(v->out, "SF_REFERENCED"));
+}
+
+static void test_udp_pty(struct env *v)
+{
+    CHECK_EQ(ctl(v, "--udp", v->udp, "-q", "width", (char *)NULL), 0);
+    CHECK(!strcmp(v->out, "55.00\n"));
+    CHECK_EQ(ctl(v, "--udp", v->udp, "move", "70", "200", (char *)NULL), 0);
+    CHECK_EQ(ctl(v, "--udp", v->udp, "watch", "speed", "--count", "2",
+                 (char *)NULL),
+             0);
+    CHECK_EQ(count_lines(v->out), 2);
+    /* No connection to announce the end of. */
+    CHECK_EQ(ctl(v, "--udp", v->udp, "bye", (char *)NULL), 1);
+    CHECK(has(v->err, "E_NOT_AVAILABLE"));
+    if (!v->pty[0]) {
+        printf("no pseudo-terminals here: serial part skipped\n");
+        return;
+    }
+    CHECK_EQ(ctl(v, "--serial", v->pty, "-q", "width", (char *)NULL), 0);
+    CHECK(!strcmp(v->out, "70.00\n"));
+    CHECK_EQ(ctl(v, "--serial", v->pty, "move", "30", "200", (char *)NULL), 0);
+    CHECK_EQ(ctl(v, "--serial", v->pty, "info", (char *)NULL), 0);
+    CHECK(has(v->out, "firmware 2.2.0"));
+    CHECK_EQ(TCP(v, "-q", "width"), 0);
+    CHECK(!strcmp(v->out, "30.00\n"));
+}
+
+/* Every wsgctl close over TCP was announced: no FAST STOP. */
+static void check_no_fast_stop(struct emu *e)
+{
+    struct emu_client c;
+    uint32_t flags = 0;
+
+    REQUIRE(emu_open(&c, e, &emu_tcp) == 0);
+    CHECK(emu_get_flags(&c, &flags) == 0);
+    printf("final flags 0x%08lX\n", (unsigned long)flags);
+    CHECK(!(flags & WSG_SF_FAST_STOP));
+    CHECK_EQ(emu_request(&c, WSG_CMD_DISCONNECT, NULL, 0, NULL, EMU_REPLY_MS),
+             WSG_E_SUCCESS);
+    emu_close(&c);
+}
+
+int main(int argc, char **argv)
+{
+    const char *exe = emu_exe(argc, argv);
+    static struct env v; /* big buffers: not on the stack */
+    struct emu e;
+    char udp_daemon[64], dir[64] = "/tmp/wsgctl-pty-XXXXXX", field[128];
+    const char *args[8];
+    unsigned rport = free_port(SOCK_DGRAM);
+    int n = 0, m;
+
+    v.ctl = getenv("WSGCTL");
+    if (!v.ctl || !v.ctl[0])
+        v.ctl = argc > 2 ? argv[2] : NULL;
+    if (!v.ctl || access(v.ctl, X_OK) != 0) {
+        printf("SKIP: no wsgctl ($WSGCTL or argv[2])\n");
+        return 77;
+    }
+    snprintf(udp_daemon, sizeof udp_daemon, "127.0.0.1:0:%u", rport);
+    args[n++] = "--tcp";
+    args[n++] = "127.0.0.1:0";
+    args[n++] = "--udp";
+    args[n++] = udp_daemon;
+    m = posix_openpt(O_RDWR | O_NOCTTY);
+    if (m >= 0 && mkdtemp(dir)) {
+        close(m);
+        snprintf(v.pty, sizeof v.pty, "%s/ttyWSG0", dir);
+        args[n++] = "--pty";
+        args[n++] = v.pty;
+    }
+    args[n] = NULL;
+    REQUIRE(emu_start(&e, exe, args) == 0);
+    REQUIRE(emu_field(&e, "tcp", field, sizeof field) != NULL);
+    snprintf(v.tcp, sizeof v.tcp, "%s", field);
+    setenv("TCP", v.tcp, 1);
+    REQUIRE(emu_field(&e, "udp", field, sizeof field) != NULL);
+    /* "127.0.0.1:PORT>REMOTE" -> "127.0.0.1:PORT:REMOTE" */
+    REQUIRE(strchr(field, '>') != NULL);
+    *strchr(field, '>') = ':';
+    snprintf(v.udp, sizeof v.udp, "%s", field);
+
+    test_usage(&v);
+    test_no_emulator(&v);
+    test_tcp(&v);
+    test_raw(&v);
+    test_decode(&v);
+    /* raw moved to 55 mm */
+    test_watch(&v);
+    test_udp_pty(&v);
+    check_no_fast_stop(&e);
+
+    CHECK_EQ(emu_stop(&e), 0);
+    if (v.pty[0])
+        rmdir(dir);
+    TEST_EXIT();
+}
