@@ -17,6 +17,11 @@ static struct wsg_session *daemon_lookup(void *ctx, uint32_t tag)
     return wsg_transport_lookup(d->transports, d->ntransports, tag);
 }
 
+static void daemon_log_flush(void *ctx)
+{
+    wsg_log_flush(ctx);
+}
+
 static int open_transport(struct wsg_daemon *d,
                           const struct wsg_transport_ops *ops)
 {
@@ -51,6 +56,26 @@ int wsg_daemon_open(struct wsg_daemon *d)
     d->ntransports = 0;
     wsg_device_init(&d->dev, &d->opt.axis);
     d->dev.disconnect_fast_stop = d->opt.disconnect_fast_stop;
+    /* The stored settings of the web page (the axis config already holds
+     * the model's defaults overridden by the options). */
+    d->dev.info.serial = d->opt.serial;
+    if (d->opt.device_tag) {
+        d->dev.tag_len = strlen(d->opt.device_tag);
+        memcpy(d->dev.tag, d->opt.device_tag, d->dev.tag_len);
+        d->dev.tag[d->dev.tag_len] = '\0';
+    }
+    if (d->opt.initial_part >= 0)
+        wsg_axis_set_part(&d->dev.axis, d->opt.initial_part,
+                          d->opt.initial_part_stiffness);
+    if (d->opt.log_path) {
+        char err[512];
+
+        r = wsg_log_open(&d->log, &d->dev, d->opt.log_path, err, sizeof err);
+        if (r < 0) {
+            fprintf(stderr, "wsgemu: %s\n", err);
+            return r;
+        }
+    }
     d->dev.lookup = daemon_lookup;
     d->dev.lookup_ctx = d;
 
@@ -59,6 +84,16 @@ int wsg_daemon_open(struct wsg_daemon *d)
         fprintf(stderr, "wsgemu: cannot set up the event loop: %s\n",
                 strerror(-r));
         return r;
+    }
+    r = wsg_loop_set_scale(&d->loop, d->opt.time_scale);
+    if (r < 0) {
+        fprintf(stderr, "wsgemu: time scale %g: must be in %g..%g\n",
+                d->opt.time_scale, WSG_LOOP_SCALE_MIN, WSG_LOOP_SCALE_MAX);
+        return r;
+    }
+    if (d->log.f) {
+        d->loop.settled = daemon_log_flush;
+        d->loop.settled_ctx = &d->log;
     }
     wsg_loop_set_transports(&d->loop, d->transports, 0);
     {
@@ -69,7 +104,9 @@ int wsg_daemon_open(struct wsg_daemon *d)
         } want[] = {{d->opt.tcp_enabled, &wsg_tcp_ops},
                     {d->opt.udp_enabled, &wsg_udp_ops},
                     {d->opt.pty_path != NULL, &wsg_pty_ops},
-                    {d->opt.can_iface != NULL, &wsg_can_ops}};
+                    {d->opt.can_iface != NULL, &wsg_can_ops},
+                    /* Last: the ready line ends with control=. */
+                    {d->opt.control_enabled, &wsg_control_ops}};
         size_t i;
 
         for (i = 0; i < sizeof want / sizeof want[0]; i++) {
@@ -120,4 +157,6 @@ void wsg_daemon_close(struct wsg_daemon *d)
         t->ops->close(t);
     }
     wsg_loop_fini(&d->loop);
+    /* Last: closing peers may still log their final packets. */
+    wsg_log_close(&d->log, &d->dev);
 }

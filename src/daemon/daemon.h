@@ -8,6 +8,7 @@
 
 #include <stddef.h>
 
+#include "log.h"
 #include "loop.h"
 #include "options.h"
 #include "transport.h"
@@ -19,6 +20,7 @@ struct wsg_daemon {
     struct wsg_loop loop;
     struct wsg_transport transports[WSG_TRANSPORT_MAX];
     size_t ntransports;
+    struct wsg_log log; /* the communication log (--log); closed: f NULL */
 };
 
 /* Set up the device, the loop and every transport the options enable. On

@@ -7,6 +7,13 @@
  * wsg_device_advance_idle call at the next wake, which keeps simulated time
  * (and with it stream and motion timing) on the same grid.
  *
+ * With a time scale X the grid's period is step / X of real time, and
+ * below WSG_LOOP_PERIOD_MIN_NS a tick runs several steps instead, so
+ * motions and streams run X times faster while the wake rate stays bounded.
+ * Paused, the timer is off and no idle time is counted: simulated time moves
+ * only by wsg_loop_step. Changing the scale or resuming starts a new grid
+ * from now, so real time that passed under the old rate is not replayed.
+ *
  * Peers that go away during a batch of events are only marked by their
  * transport; the loop lets the transports finish closing them after the
  * batch, when no event of the batch can still name them.
@@ -88,6 +95,9 @@ int wsg_loop_init(struct wsg_loop *l, struct wsg_device *dev, uint32_t step_us)
     l->signal.fd = -1;
     l->dev = dev;
     l->step_ns = (uint64_t)step_us * NS_PER_US;
+    l->scale = 1.0;
+    l->period_ns = l->step_ns;
+    l->tick_steps = 1;
 
     /* Blocked before anything else exists, so a SIGTERM sent right after
      * the ready line is queued for the signalfd, never the default
@@ -113,8 +123,8 @@ int wsg_loop_init(struct wsg_loop *l, struct wsg_device *dev, uint32_t step_us)
     r = wsg_loop_watch_add(l, &l->timer, EPOLLIN);
     if (r < 0)
         goto fail_r;
-    /* The grid's origin: the first step is one step after start. */
-    l->due_ns = mono_ns() + l->step_ns;
+    /* The grid's origin: the first tick is one period after start. */
+    l->due_ns = mono_ns() + l->period_ns;
     return 0;
 
 fail:
@@ -167,6 +177,14 @@ static void run_step(struct wsg_loop *l)
     l->steps++;
 }
 
+static void run_tick(struct wsg_loop *l)
+{
+    unsigned i;
+
+    for (i = 0; i < l->tick_steps; i++)
+        run_step(l);
+}
+
 static int needs_steps(struct wsg_loop *l)
 {
     int streaming = 0;
@@ -185,12 +203,12 @@ static void skip_idle(struct wsg_loop *l, uint64_t now)
 {
     uint64_t n;
 
-    if (l->due_ns > now)
+    if (l->paused || l->due_ns > now)
         return;
-    n = (now - l->due_ns) / l->step_ns + 1;
-    wsg_device_advance_idle(l->dev, n);
-    l->due_ns += n * l->step_ns;
-    l->idle_steps += n;
+    n = (now - l->due_ns) / l->period_ns + 1;
+    wsg_device_advance_idle(l->dev, n * l->tick_steps);
+    l->due_ns += n * l->period_ns;
+    l->idle_steps += n * l->tick_steps;
 }
 
 static int set_timer(struct wsg_loop *l, int arm)
@@ -200,7 +218,7 @@ static int set_timer(struct wsg_loop *l, int arm)
     memset(&its, 0, sizeof its);
     if (arm) {
         its.it_value = ns_to_ts(l->due_ns);
-        its.it_interval = ns_to_ts(l->step_ns);
+        its.it_interval = ns_to_ts(l->period_ns);
     }
     if (timerfd_settime(l->timer.fd, TFD_TIMER_ABSTIME, &its, NULL) < 0)
         return -errno;
@@ -210,7 +228,7 @@ static int set_timer(struct wsg_loop *l, int arm)
 
 static int update_timer(struct wsg_loop *l)
 {
-    int want = needs_steps(l);
+    int want = !l->paused && needs_steps(l);
 
     if (want == l->armed)
         return 0;
@@ -234,18 +252,92 @@ static void on_timer(struct wsg_loop *l)
         return;
     now = mono_ns();
     while (l->due_ns <= now && n < WSG_LOOP_CATCHUP_MAX) {
-        run_step(l);
-        l->due_ns += l->step_ns;
+        run_tick(l);
+        l->due_ns += l->period_ns;
         n++;
     }
     if (l->due_ns <= now) {
-        /* Too far behind to catch up: drop whole steps up to the grid point
+        /* Too far behind to catch up: drop whole ticks up to the grid point
          * before now, which runs on the next wake. */
-        uint64_t skip = (now - l->due_ns) / l->step_ns;
+        uint64_t skip = (now - l->due_ns) / l->period_ns;
 
-        l->due_ns += skip * l->step_ns;
-        l->overruns += skip;
+        l->due_ns += skip * l->period_ns;
+        l->overruns += skip * l->tick_steps;
     }
+}
+
+/* A new grid from now: real time that passed under the old rate (or while
+ * paused) is not replayed. The model's time stays where it is. */
+static int regrid(struct wsg_loop *l)
+{
+    int r;
+
+    if (l->armed) {
+        r = set_timer(l, 0);
+        if (r < 0)
+            return r;
+    }
+    l->due_ns = mono_ns() + l->period_ns;
+    return update_timer(l);
+}
+
+int wsg_loop_set_scale(struct wsg_loop *l, double scale)
+{
+    double period;
+    unsigned k = 1;
+
+    if (!(scale >= WSG_LOOP_SCALE_MIN && scale <= WSG_LOOP_SCALE_MAX))
+        return -EINVAL;
+    /* Idle time so far counts at the old rate. */
+    if (!l->armed)
+        skip_idle(l, mono_ns());
+    period = (double)l->step_ns / scale;
+    if (period < (double)WSG_LOOP_PERIOD_MIN_NS) {
+        k = (unsigned)((double)WSG_LOOP_PERIOD_MIN_NS / period) + 1u;
+        period *= k;
+    }
+    l->scale = scale;
+    l->tick_steps = k;
+    l->period_ns = (uint64_t)(period + 0.5);
+    if (l->paused)
+        return 0;
+    return regrid(l);
+}
+
+int wsg_loop_pause(struct wsg_loop *l)
+{
+    if (l->paused)
+        return 0;
+    if (!l->armed)
+        skip_idle(l, mono_ns());
+    l->paused = 1;
+    return l->armed ? set_timer(l, 0) : 0;
+}
+
+int wsg_loop_resume(struct wsg_loop *l)
+{
+    if (!l->paused)
+        return 0;
+    l->paused = 0;
+    return regrid(l);
+}
+
+int wsg_loop_step(struct wsg_loop *l, uint64_t nsteps)
+{
+    if (!l->paused)
+        return -EBUSY;
+    while (nsteps > 0) {
+        /* Nothing to do and no input can arrive meanwhile: the rest would
+         * change nothing but the time. */
+        if (!needs_steps(l)) {
+            wsg_device_advance_idle(l->dev, nsteps);
+            l->idle_steps += nsteps;
+            break;
+        }
+        run_step(l);
+        nsteps--;
+    }
+    return 0;
 }
 
 static void on_signal(struct wsg_loop *l)
@@ -292,6 +384,8 @@ int wsg_loop_run(struct wsg_loop *l)
         r = update_timer(l);
         if (r < 0)
             return r;
+        if (l->settled)
+            l->settled(l->settled_ctx);
     }
     return 0;
 }

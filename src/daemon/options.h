@@ -1,11 +1,14 @@
 /*
- * The daemon's command line. Everything the options decide is collected in
- * one struct, filled with defaults first, so later sources (a config file)
- * can write the same fields before the command line overrides them.
+ * The daemon's command line and config file. Everything the options decide
+ * is collected in one struct, filled with defaults first; a config file
+ * (--config) writes the same fields before the command line overrides them.
+ * Both go through one table of settings, so a key of the file and the long
+ * option of the same name always mean the same thing.
  */
 #ifndef WSG_DAEMON_OPTIONS_H
 #define WSG_DAEMON_OPTIONS_H
 
+#include <stddef.h>
 #include <stdint.h>
 
 #include "wsg/axis.h"
@@ -18,6 +21,9 @@
 #define WSG_UDP_REMOTE_DEFAULT 1501u
 #define WSG_CAN_ID_DEFAULT     0x000u
 #define WSG_CAN_ID_MAX         0x7FEu /* answers go on ID + 1, an 11-bit ID too */
+/* Room for the strings a config file gives (paths, names, the tag): they
+ * must outlive the file's line buffer, and options hold no heap memory. */
+#define WSG_OPTIONS_STRBUF 2048u
 
 /* An IPv4 endpoint as given on the command line. */
 struct wsg_endpoint {
@@ -42,13 +48,29 @@ struct wsg_options {
     const char *log_path;        /* NULL: no log; "-": stderr */
     const char *config_path;     /* --config FILE, read before the options */
     double initial_part;         /* --part WIDTH; < 0: none */
-    uint32_t serial;             /* Get System Information SN */
-    const char *device_tag;      /* NULL: none */
-    int check_crc;               /* 0 with --no-crc */
-    int disconnect_fast_stop;    /* 0 with --no-disconnect-fast-stop */
+    double initial_part_stiffness; /* N/mm; 0: the model's default */
+    uint32_t serial;               /* Get System Information SN */
+    const char *device_tag;        /* NULL: none */
+    int check_crc;                 /* 0 with --no-crc */
+    int disconnect_fast_stop;      /* 0 with --no-disconnect-fast-stop */
     uint32_t step_us;
-    const char *model;           /* NULL: the default model */
-    struct wsg_axis_config axis; /* the model's config, step_us applied */
+    const char *model; /* NULL: the default model */
+    /* The web page's settings; negative (homing_dir: WSG_HOME_DEFAULT)
+     * means the model's default. Checked against the model's limits when
+     * the model is known, i.e. after the whole command line. */
+    double acceleration;         /* mm/s^2 */
+    double force_limit;          /* N */
+    int homing_dir;              /* WSG_HOME_POSITIVE / WSG_HOME_NEGATIVE */
+    double clamp_travel;         /* mm */
+    double width_tolerance;      /* mm */
+    struct wsg_axis_config axis; /* the model's config, settings applied */
+
+    /* Where the range-checked settings came from, for error messages:
+     * line number in config_path, 0 for the command line. */
+    unsigned line_acceleration, line_force_limit, line_clamp_travel,
+        line_width_tolerance, line_part;
+    char strbuf[WSG_OPTIONS_STRBUF];
+    size_t strbuf_used;
 };
 
 enum wsg_options_result {

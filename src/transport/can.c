@@ -464,6 +464,9 @@ static int can_open(struct wsg_transport *t,
     }
     wsg_parser_init(&can->parser, can->check_crc);
     wsg_session_init(&can->session, t->tag_base | 1u, 0, can_packet, can);
+    /* For the communication log. */
+    snprintf(can->session.peer, sizeof can->session.peer, "can %s:0x%03X",
+             can->iface, (unsigned)can->rx_id);
     can_warn_if_down(can);
     return 0;
 

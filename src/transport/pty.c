@@ -491,6 +491,8 @@ static int pty_open(struct wsg_transport *t,
     pty->watching = 1;
     wsg_parser_init(&pty->parser, pty->check_crc);
     wsg_session_init(&pty->session, t->tag_base | 1u, 0, pty_packet, pty);
+    /* For the communication log. */
+    snprintf(pty->session.peer, sizeof pty->session.peer, "pty %s", pty->path);
     t->state = pty;
     /* Last, so nothing can fail after the link exists. */
     r = make_link(pty, err, errlen);

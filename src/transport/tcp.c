@@ -286,6 +286,8 @@ static void conn_accept(struct wsg_tcp *tcp, int fd,
     wsg_parser_init(&c->parser, tcp->check_crc);
     wsg_session_init(&c->session, next_tag(tcp, (unsigned)slot),
                      WSG_SESSION_CONNECTION, conn_packet, c);
+    /* For the communication log. */
+    snprintf(c->session.peer, sizeof c->session.peer, "tcp %s", c->peer);
     tcp->slots[slot] = c;
     tcp->nconns++;
 }
@@ -375,6 +377,22 @@ static void tcp_settle(struct wsg_transport *t)
         if (c && c->dead)
             conn_close(tcp, c);
     }
+}
+
+static unsigned tcp_drop_all(struct wsg_transport *t)
+{
+    struct wsg_tcp *tcp = t->state;
+    unsigned i, n = 0;
+
+    for (i = 0; i < WSG_TCP_CONN_MAX; i++) {
+        struct wsg_tcp_conn *c = tcp->slots[i];
+
+        if (c && !c->dead) {
+            conn_kill(c, "dropped by the control channel");
+            n++;
+        }
+    }
+    return n;
 }
 
 static int tcp_describe(const struct wsg_transport *t, char *buf, size_t len)
@@ -489,4 +507,5 @@ const struct wsg_transport_ops wsg_tcp_ops = {
     .lookup = tcp_lookup,
     .each_session = tcp_each_session,
     .settle = tcp_settle,
+    .drop_all = tcp_drop_all,
 };

@@ -56,6 +56,11 @@ struct wsg_transport_ops {
                          void *ctx);
     /* Optional. Between epoll batches: finish closing marked peers. */
     void (*settle)(struct wsg_transport *t);
+    /* Optional (the control channel's drop). End every connection as if
+     * its peer had gone: only marked, so settle closes them the usual way
+     * and a close without 07h brings the FAST STOP rule. Returns how many
+     * were dropped. */
+    unsigned (*drop_all)(struct wsg_transport *t);
 };
 
 struct wsg_transport {
@@ -68,6 +73,9 @@ extern const struct wsg_transport_ops wsg_tcp_ops;
 extern const struct wsg_transport_ops wsg_udp_ops;
 extern const struct wsg_transport_ops wsg_pty_ops;
 extern const struct wsg_transport_ops wsg_can_ops;
+/* Not a gripper interface: the control channel (control.c), opened last so
+ * that it ends the ready line. */
+extern const struct wsg_transport_ops wsg_control_ops;
 
 /* The message for a socket that cannot listen on ADDR:PORT: the reason,
  * the step that failed when it is not the bind (step NULL), and for a port

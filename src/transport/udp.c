@@ -100,6 +100,13 @@ static struct wsg_udp_peer *udp_peer(struct wsg_udp *udp,
     wsg_session_init(&p->session,
                      udp->tag_base | udp->next_gen << WSG_UDP_PEER_BITS | i, 0,
                      udp_packet, p);
+    {
+        /* For the communication log: replies go to this address. */
+        char ip[INET_ADDRSTRLEN] = "?";
+
+        inet_ntop(AF_INET, &from->sin_addr, ip, sizeof ip);
+        snprintf(p->session.peer, sizeof p->session.peer, "udp %s", ip);
+    }
     udp->next_gen = (udp->next_gen + 1) & WSG_UDP_GEN_MASK;
     return p;
 }

@@ -1,0 +1,731 @@
+/*
+ * The control channel: a listening TCP socket and up to WSG_CTL_CLIENTS_MAX
+ * clients, each with a line buffer and a bounded output queue (the same
+ * wsg_outq the gripper's TCP port uses, so a client that stops reading is
+ * dropped instead of blocking the loop).
+ *
+ * Commands act at once, between the loop's model steps: the world setters
+ * only record what the model's next step will see (a removed part is lost
+ * by the step, with the statistics the manual gives), and the time commands
+ * go to the loop, which alone deals with time. "time step" runs its steps
+ * synchronously before answering, so a test in lockstep knows that every
+ * packet the steps caused was sent before the "ok".
+ *
+ * Like the TCP port, a client that ends is only marked during the event
+ * batch and freed by settle.
+ */
+#define _GNU_SOURCE
+
+#include "control.h"
+
+#include <arpa/inet.h>
+#include <errno.h>
+#include <math.h>
+#include <netinet/in.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/epoll.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include "outq.h"
+
+#define WSG_CTL_ADDR_LEN   (INET_ADDRSTRLEN + 6)
+#define WSG_CTL_READ_CHUNK 1024u
+#define WSG_CTL_REPLY_MAX  2048u
+#define WSG_CTL_ARGS_MAX   4
+/* "time step" at most one hour at once: the loop is blocked meanwhile. */
+#define WSG_CTL_STEP_MS_MAX 3600000.0
+
+struct wsg_ctl;
+
+struct wsg_ctl_client {
+    struct wsg_watch watch; /* first: epoll hands back &watch */
+    struct wsg_ctl *ctl;
+    unsigned slot;
+    int dead;
+    int overlong; /* discarding the rest of a too long line */
+    uint32_t events;
+    size_t len;
+    char line[WSG_CTL_LINE_MAX + 1];
+    struct wsg_outq out; /* last: its buffer needs no initial value */
+};
+
+struct wsg_ctl {
+    struct wsg_watch watch; /* the listening socket */
+    struct wsg_loop *loop;
+    struct wsg_device *dev;
+    unsigned nclients;
+    unsigned ndead;
+    char local[WSG_CTL_ADDR_LEN];
+    struct wsg_ctl_client *clients[WSG_CTL_CLIENTS_MAX];
+};
+
+static void format_addr(char *buf, size_t len, const struct sockaddr_in *sa)
+{
+    char ip[INET_ADDRSTRLEN];
+
+    if (!inet_ntop(AF_INET, &sa->sin_addr, ip, sizeof ip))
+        strcpy(ip, "?");
+    snprintf(buf, len, "%s:%u", ip, (unsigned)ntohs(sa->sin_port));
+}
+
+static void client_kill(struct wsg_ctl_client *c, const char *why)
+{
+    if (c->dead)
+        return;
+    c->dead = 1;
+    c->ctl->ndead++;
+    if (why)
+        fprintf(stderr, "wsgemu: control: closing a client: %s\n", why);
+}
+
+static void client_set_events(struct wsg_ctl_client *c, uint32_t events)
+{
+    int r;
+
+    if (c->events == events)
+        return;
+    r = wsg_loop_watch_mod(c->ctl->loop, &c->watch, events);
+    if (r < 0) {
+        client_kill(c, strerror(-r));
+        return;
+    }
+    c->events = events;
+}
+
+static void client_sent(struct wsg_ctl_client *c, int r)
+{
+    if (r == -ENOBUFS)
+        client_kill(c, "output queue over 64 KiB (client not reading)");
+    else if (r < 0)
+        client_kill(c, r == -EPIPE || r == -ECONNRESET ? NULL : strerror(-r));
+    else if (r)
+        client_set_events(c, c->events | EPOLLOUT);
+    else
+        client_set_events(c, c->events & ~(uint32_t)EPOLLOUT);
+}
+
+/* One answer line; the newline is added here. */
+static void reply(struct wsg_ctl_client *c, const char *fmt, ...)
+{
+    char buf[WSG_CTL_REPLY_MAX];
+    va_list ap;
+    int n;
+
+    if (c->dead)
+        return;
+    va_start(ap, fmt);
+    n = vsnprintf(buf, sizeof buf - 1, fmt, ap);
+    va_end(ap);
+    if (n < 0)
+        return;
+    if ((size_t)n > sizeof buf - 2)
+        n = (int)(sizeof buf - 2);
+    buf[n++] = '\n';
+    client_sent(c, wsg_outq_send(&c->out, c->watch.fd, (const uint8_t *)buf,
+                                 (size_t)n));
+}
+
+/* ---- arguments ---- */
+
+/* A whole finite number, nothing after it. */
+static int parse_num(const char *s, double *v)
+{
+    char *end;
+
+    errno = 0;
+    *v = strtod(s, &end);
+    return end != s && *end == '\0' && errno == 0 && isfinite(*v);
+}
+
+/* Seconds of simulated time: microseconds exactly, trailing zeros dropped
+ * down to milliseconds ("12.345", "0.900", "1.2345"). */
+static void format_time(char *buf, size_t len, uint64_t us)
+{
+    char frac[8];
+    int digits = 6;
+
+    snprintf(frac, sizeof frac, "%06u", (unsigned)(us % 1000000u));
+    while (digits > 3 && frac[digits - 1] == '0')
+        digits--;
+    frac[digits] = '\0';
+    snprintf(buf, len, "%llu.%s", (unsigned long long)(us / 1000000u), frac);
+}
+
+/* ---- commands ---- */
+
+static void cmd_part(struct wsg_ctl_client *c, int argc, char **argv)
+{
+    struct wsg_axis *ax = &c->ctl->dev->axis;
+    double width, stiffness = 0.0;
+
+    if (argc == 2 && strcmp(argv[1], "none") == 0) {
+        wsg_axis_set_part(ax, -1.0, 0.0);
+        reply(c, "ok part none");
+        return;
+    }
+    if (argc < 2 || argc > 3) {
+        reply(c, "error usage: part WIDTH [STIFFNESS] | part none");
+        return;
+    }
+    if (!parse_num(argv[1], &width) || width < 0.0 || width > ax->cfg.stroke) {
+        reply(c, "error part: WIDTH must be a number of mm in 0..%g",
+              ax->cfg.stroke);
+        return;
+    }
+    if (argc == 3 && (!parse_num(argv[2], &stiffness) || stiffness <= 0.0)) {
+        reply(c, "error part: STIFFNESS must be a positive number of N/mm");
+        return;
+    }
+    wsg_axis_set_part(ax, width, stiffness);
+    reply(c, "ok part %g %g", ax->part_width, ax->part_stiffness);
+}
+
+static void cmd_obstacle(struct wsg_ctl_client *c, int argc, char **argv)
+{
+    struct wsg_axis *ax = &c->ctl->dev->axis;
+    double width;
+
+    if (argc != 2) {
+        reply(c, "error usage: obstacle WIDTH | obstacle none");
+        return;
+    }
+    if (strcmp(argv[1], "none") == 0) {
+        wsg_axis_set_obstacle(ax, -1.0);
+        reply(c, "ok obstacle none");
+        return;
+    }
+    if (!parse_num(argv[1], &width) || width < 0.0 || width > ax->cfg.stroke) {
+        reply(c, "error obstacle: WIDTH must be a number of mm in 0..%g",
+              ax->cfg.stroke);
+        return;
+    }
+    wsg_axis_set_obstacle(ax, width);
+    reply(c, "ok obstacle %g", width);
+}
+
+static const struct {
+    const char *name;
+    uint32_t flag;
+} faults[] = {{"temp-warning", WSG_SF_TEMP_WARNING},
+              {"temp-fault", WSG_SF_TEMP_FAULT},
+              {"power", WSG_SF_POWER_FAULT},
+              {"current", WSG_SF_CURR_FAULT},
+              {"finger", WSG_SF_FINGER_FAULT}};
+
+static void cmd_fault(struct wsg_ctl_client *c, int argc, char **argv)
+{
+    size_t i;
+    int on;
+
+    if (argc != 3) {
+        reply(c, "error usage: fault temp-warning|temp-fault|power|current|"
+                 "finger on|off");
+        return;
+    }
+    if (strcmp(argv[2], "on") == 0)
+        on = 1;
+    else if (strcmp(argv[2], "off") == 0)
+        on = 0;
+    else {
+        reply(c, "error fault: say on or off, not '%s'", argv[2]);
+        return;
+    }
+    for (i = 0; i < sizeof faults / sizeof faults[0]; i++) {
+        if (strcmp(argv[1], faults[i].name) == 0) {
+            wsg_axis_set_fault(&c->ctl->dev->axis, faults[i].flag, on);
+            reply(c, "ok fault %s %s", faults[i].name, on ? "on" : "off");
+            return;
+        }
+    }
+    reply(c,
+          "error fault: unknown fault '%s' (temp-warning, temp-fault, "
+          "power, current, finger)",
+          argv[1]);
+}
+
+static void reply_time(struct wsg_ctl_client *c)
+{
+    char t[32];
+
+    format_time(t, sizeof t, c->ctl->dev->axis.time_us);
+    reply(c, "ok %s", t);
+}
+
+static void cmd_time(struct wsg_ctl_client *c, int argc, char **argv)
+{
+    struct wsg_loop *l = c->ctl->loop;
+    uint32_t step_us = c->ctl->dev->axis.cfg.step_us;
+    double v;
+    int r;
+
+    if (argc == 1) {
+        reply_time(c);
+        return;
+    }
+    if (strcmp(argv[1], "pause") == 0 && argc == 2) {
+        r = wsg_loop_pause(l);
+        if (r < 0)
+            reply(c, "error time pause: %s", strerror(-r));
+        else
+            reply(c, "ok paused");
+        return;
+    }
+    if (strcmp(argv[1], "resume") == 0 && argc == 2) {
+        r = wsg_loop_resume(l);
+        if (r < 0)
+            reply(c, "error time resume: %s", strerror(-r));
+        else
+            reply(c, "ok running at scale %g", l->scale);
+        return;
+    }
+    if (strcmp(argv[1], "scale") == 0 && argc == 3) {
+        if (!parse_num(argv[2], &v)) {
+            reply(c, "error time scale: '%s' is not a number", argv[2]);
+            return;
+        }
+        r = wsg_loop_set_scale(l, v);
+        if (r == -EINVAL)
+            reply(c, "error time scale: X must be in %g..%g",
+                  WSG_LOOP_SCALE_MIN, WSG_LOOP_SCALE_MAX);
+        else if (r < 0)
+            reply(c, "error time scale: %s", strerror(-r));
+        else
+            reply(c, "ok scale %g%s", l->scale, l->paused ? " paused" : "");
+        return;
+    }
+    if (strcmp(argv[1], "step") == 0 && argc == 3) {
+        double us;
+
+        if (!parse_num(argv[2], &v) || v <= 0.0 || v > WSG_CTL_STEP_MS_MAX) {
+            reply(c,
+                  "error time step: MS must be a number of ms in "
+                  "(0, %.0f]",
+                  WSG_CTL_STEP_MS_MAX);
+            return;
+        }
+        /* Exactly the time asked for, or nothing: a lockstep test must
+         * not drift by rounding. */
+        us = v * 1000.0;
+        if (fabs(us - floor(us + 0.5)) > 1e-6 ||
+            (uint64_t)(us + 0.5) % step_us != 0) {
+            reply(c,
+                  "error time step: %s ms is not a whole number of %u us "
+                  "steps",
+                  argv[2], (unsigned)step_us);
+            return;
+        }
+        r = wsg_loop_step(l, (uint64_t)(us + 0.5) / step_us);
+        if (r == -EBUSY)
+            reply(c, "error time step: not paused (time pause first)");
+        else if (r < 0)
+            reply(c, "error time step: %s", strerror(-r));
+        else
+            reply_time(c);
+        return;
+    }
+    reply(c, "error usage: time | time scale X | time pause | time step MS | "
+             "time resume");
+}
+
+static const char *const flag_names[21] = {"referenced",
+                                           "moving",
+                                           "blocked_minus",
+                                           "blocked_plus",
+                                           "soft_limit_minus",
+                                           "soft_limit_plus",
+                                           "axis_stopped",
+                                           "target_pos_reached",
+                                           "overdrive_mode",
+                                           "force_control_mode",
+                                           NULL,
+                                           NULL,
+                                           "fast_stop",
+                                           "temp_warning",
+                                           "temp_fault",
+                                           "power_fault",
+                                           "current_fault",
+                                           "finger_fault",
+                                           "cmd_failure",
+                                           "script_running",
+                                           "script_failure"};
+
+static const char *const grasp_names[] = {
+    "idle",    "grasping",  "no_part",     "part_lost",
+    "holding", "releasing", "positioning", "error"};
+
+/* Appends to buf at *used; a reply that does not fit is cut, never
+ * overrun (it cannot happen with these keys). */
+static void append(char *buf, size_t cap, size_t *used, const char *fmt, ...)
+{
+    va_list ap;
+    int n;
+
+    if (*used >= cap)
+        return;
+    va_start(ap, fmt);
+    n = vsnprintf(buf + *used, cap - *used, fmt, ap);
+    va_end(ap);
+    if (n > 0)
+        *used += (size_t)n;
+}
+
+static void cmd_state(struct wsg_ctl_client *c)
+{
+    const struct wsg_device *d = c->ctl->dev;
+    const struct wsg_axis *ax = &d->axis;
+    const struct wsg_loop *l = c->ctl->loop;
+    uint32_t flags =
+        wsg_axis_flags(ax) | (d->cmd_failure ? WSG_SF_CMD_FAILURE : 0u);
+    unsigned gs = (unsigned)ax->grasp_state;
+    char buf[WSG_CTL_REPLY_MAX - 8];
+    char t[32];
+    size_t used = 0;
+    unsigned i;
+    int first = 1;
+
+    format_time(t, sizeof t, ax->time_us);
+    append(buf, sizeof buf, &used,
+           "{\"width\":%.3f,\"speed\":%.3f,\"force\":%.3f,"
+           "\"temperature\":%.2f,\"flags\":%lu,\"flag_names\":[",
+           ax->width, ax->speed, ax->force, ax->temperature,
+           (unsigned long)flags);
+    for (i = 0; i < sizeof flag_names / sizeof flag_names[0]; i++) {
+        if (!(flags & (1u << i)) || !flag_names[i])
+            continue;
+        append(buf, sizeof buf, &used, "%s\"%s\"", first ? "" : ",",
+               flag_names[i]);
+        first = 0;
+    }
+    append(buf, sizeof buf, &used,
+           "],\"grasp_state\":%u,\"grasp_state_name\":\"%s\","
+           "\"stats\":{\"total\":%lu,\"no_part\":%u,\"lost_part\":%u},"
+           "\"time\":%s,\"paused\":%s,\"scale\":%g}",
+           gs,
+           gs < sizeof grasp_names / sizeof grasp_names[0] ? grasp_names[gs]
+                                                           : "unknown",
+           (unsigned long)ax->stats.total, (unsigned)ax->stats.no_part,
+           (unsigned)ax->stats.lost_part, t, l->paused ? "true" : "false",
+           l->scale);
+    reply(c, "ok %s", buf);
+}
+
+static void cmd_drop(struct wsg_ctl_client *c)
+{
+    struct wsg_loop *l = c->ctl->loop;
+    unsigned n = 0;
+    size_t i;
+
+    for (i = 0; i < l->ntransports; i++)
+        if (l->transports[i].ops->drop_all)
+            n += l->transports[i].ops->drop_all(&l->transports[i]);
+    reply(c, "ok dropped %u", n);
+}
+
+static void end_streams(void *ctx, struct wsg_session *s)
+{
+    (void)ctx;
+    s->nstreams = 0;
+    memset(s->streams, 0, sizeof s->streams);
+}
+
+static void cmd_reset(struct wsg_ctl_client *c)
+{
+    struct wsg_loop *l = c->ctl->loop;
+
+    wsg_device_reset(c->ctl->dev);
+    /* A gripper that powers up again streams nothing until asked. */
+    wsg_transport_each_session(l->transports, l->ntransports, end_streams,
+                               NULL);
+    reply(c, "ok reset");
+}
+
+static void run_line(struct wsg_ctl_client *c, char *line)
+{
+    char *argv[WSG_CTL_ARGS_MAX];
+    int argc = 0;
+    char *p = line;
+
+    for (;;) {
+        while (*p == ' ' || *p == '\t' || *p == '\r')
+            p++;
+        if (!*p)
+            break;
+        if (argc == WSG_CTL_ARGS_MAX) {
+            reply(c, "error too many arguments");
+            return;
+        }
+        argv[argc++] = p;
+        while (*p && *p != ' ' && *p != '\t' && *p != '\r')
+            p++;
+        if (*p)
+            *p++ = '\0';
+    }
+    /* An empty line asks nothing (nc users hit return twice). */
+    if (argc == 0)
+        return;
+    if (strcmp(argv[0], "part") == 0)
+        cmd_part(c, argc, argv);
+    else if (strcmp(argv[0], "obstacle") == 0)
+        cmd_obstacle(c, argc, argv);
+    else if (strcmp(argv[0], "fault") == 0)
+        cmd_fault(c, argc, argv);
+    else if (strcmp(argv[0], "time") == 0)
+        cmd_time(c, argc, argv);
+    else if (argc > 1 &&
+             (strcmp(argv[0], "state") == 0 || strcmp(argv[0], "drop") == 0 ||
+              strcmp(argv[0], "reset") == 0 || strcmp(argv[0], "help") == 0))
+        reply(c, "error %s takes no arguments", argv[0]);
+    else if (strcmp(argv[0], "state") == 0)
+        cmd_state(c);
+    else if (strcmp(argv[0], "drop") == 0)
+        cmd_drop(c);
+    else if (strcmp(argv[0], "reset") == 0)
+        cmd_reset(c);
+    else if (strcmp(argv[0], "help") == 0)
+        reply(c, "ok commands: part WIDTH [STIFFNESS]|none, obstacle "
+                 "WIDTH|none, fault NAME on|off, time [scale X|pause|step "
+                 "MS|resume], state, drop, reset");
+    else
+        reply(c, "error unknown command '%.32s' (try help)", argv[0]);
+}
+
+static void client_input(struct wsg_ctl_client *c, const char *data, size_t n)
+{
+    size_t i;
+
+    for (i = 0; i < n && !c->dead; i++) {
+        char ch = data[i];
+
+        if (ch == '\n') {
+            if (c->overlong)
+                reply(c, "error line longer than %u bytes", WSG_CTL_LINE_MAX);
+            else {
+                c->line[c->len] = '\0';
+                run_line(c, c->line);
+            }
+            c->len = 0;
+            c->overlong = 0;
+        } else if (c->overlong) {
+            continue;
+        } else if (c->len == WSG_CTL_LINE_MAX || ch == '\0') {
+            /* A NUL would cut the line short unseen: treat as garbage. */
+            c->overlong = 1;
+        } else {
+            c->line[c->len++] = ch;
+        }
+    }
+}
+
+static void client_read(struct wsg_ctl_client *c)
+{
+    char buf[WSG_CTL_READ_CHUNK];
+    ssize_t n;
+
+    n = recv(c->watch.fd, buf, sizeof buf, MSG_DONTWAIT);
+    if (n > 0) {
+        client_input(c, buf, (size_t)n);
+        return;
+    }
+    if (n == 0) {
+        client_kill(c, NULL);
+        return;
+    }
+    if (errno == EINTR || errno == EAGAIN || errno == EWOULDBLOCK)
+        return;
+    client_kill(c, errno == ECONNRESET ? NULL : strerror(errno));
+}
+
+static void client_free(struct wsg_ctl *ctl, struct wsg_ctl_client *c)
+{
+    wsg_loop_watch_del(ctl->loop, &c->watch);
+    close(c->watch.fd);
+    ctl->clients[c->slot] = NULL;
+    ctl->nclients--;
+    if (c->dead)
+        ctl->ndead--;
+    free(c);
+}
+
+static void on_listen(struct wsg_ctl *ctl)
+{
+    static const char full[] = "error too many control clients\n";
+    struct wsg_ctl_client *c;
+    unsigned slot;
+    int fd;
+    int r;
+
+    fd = accept4(ctl->watch.fd, NULL, NULL, SOCK_NONBLOCK | SOCK_CLOEXEC);
+    if (fd < 0)
+        return; /* EAGAIN, or a pending connection that failed */
+    for (slot = 0; slot < WSG_CTL_CLIENTS_MAX; slot++)
+        if (!ctl->clients[slot])
+            break;
+    if (slot == WSG_CTL_CLIENTS_MAX) {
+        /* Told why, rather than left to guess from a bare close. */
+        if (send(fd, full, sizeof full - 1, MSG_NOSIGNAL) < 0)
+            (void)0;
+        close(fd);
+        return;
+    }
+    c = malloc(sizeof *c);
+    if (!c) {
+        close(fd);
+        return;
+    }
+    memset(c, 0, offsetof(struct wsg_ctl_client, out));
+    wsg_outq_init(&c->out, 1);
+    c->watch.owner = ctl->watch.owner;
+    c->watch.fd = fd;
+    c->ctl = ctl;
+    c->slot = slot;
+    c->events = EPOLLIN | EPOLLRDHUP;
+    r = wsg_loop_watch_add(ctl->loop, &c->watch, c->events);
+    if (r < 0) {
+        fprintf(stderr, "wsgemu: control: refused a client: %s\n",
+                strerror(-r));
+        close(fd);
+        free(c);
+        return;
+    }
+    ctl->clients[slot] = c;
+    ctl->nclients++;
+}
+
+static void ctl_handle(struct wsg_transport *t, struct wsg_watch *w,
+                       uint32_t events)
+{
+    struct wsg_ctl *ctl = t->state;
+    struct wsg_ctl_client *c;
+
+    if (w == &ctl->watch) {
+        on_listen(ctl);
+        return;
+    }
+    c = (struct wsg_ctl_client *)w;
+    if (c->dead)
+        return;
+    if (events & EPOLLOUT)
+        client_sent(c, wsg_outq_flush(&c->out, c->watch.fd));
+    /* Lines that came before a close are still answered (as far as the
+     * peer still reads): "printf 'drop\n' | nc" must work. */
+    if (!c->dead && (events & (EPOLLIN | EPOLLRDHUP | EPOLLHUP | EPOLLERR)))
+        client_read(c);
+}
+
+static void ctl_settle(struct wsg_transport *t)
+{
+    struct wsg_ctl *ctl = t->state;
+    unsigned i;
+
+    for (i = 0; i < WSG_CTL_CLIENTS_MAX && ctl->ndead > 0; i++)
+        if (ctl->clients[i] && ctl->clients[i]->dead)
+            client_free(ctl, ctl->clients[i]);
+}
+
+static int ctl_describe(const struct wsg_transport *t, char *buf, size_t len)
+{
+    const struct wsg_ctl *ctl = t->state;
+    int r = snprintf(buf, len, "%s", ctl->local);
+
+    return r < 0 || (size_t)r >= len ? -ENOSPC : 0;
+}
+
+static void ctl_close(struct wsg_transport *t)
+{
+    struct wsg_ctl *ctl = t->state;
+    unsigned i;
+
+    if (!ctl)
+        return;
+    for (i = 0; i < WSG_CTL_CLIENTS_MAX; i++)
+        if (ctl->clients[i])
+            client_free(ctl, ctl->clients[i]);
+    if (ctl->watch.fd >= 0) {
+        wsg_loop_watch_del(ctl->loop, &ctl->watch);
+        close(ctl->watch.fd);
+    }
+    free(ctl);
+    t->state = NULL;
+}
+
+static int ctl_open(struct wsg_transport *t,
+                    const struct wsg_transport_env *env, char *err,
+                    size_t errlen)
+{
+    const struct wsg_endpoint *ep = &env->opt->control;
+    struct wsg_ctl *ctl;
+    struct sockaddr_in sa;
+    socklen_t salen = sizeof sa;
+    char where[WSG_CTL_ADDR_LEN];
+    const char *step = "setup";
+    int one = 1;
+    int r;
+
+    memset(&sa, 0, sizeof sa);
+    sa.sin_family = AF_INET;
+    memcpy(&sa.sin_addr.s_addr, ep->addr, 4);
+    sa.sin_port = htons(ep->port);
+    format_addr(where, sizeof where, &sa);
+
+    ctl = calloc(1, sizeof *ctl);
+    if (!ctl) {
+        r = -ENOMEM;
+        goto fail;
+    }
+    ctl->loop = env->loop;
+    ctl->dev = env->dev;
+    ctl->watch.owner = t;
+    step = "socket";
+    ctl->watch.fd =
+        socket(AF_INET, SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
+    if (ctl->watch.fd < 0)
+        goto fail_errno;
+    /* A restarted emulator must not wait out TIME_WAIT. */
+    step = "SO_REUSEADDR";
+    if (setsockopt(ctl->watch.fd, SOL_SOCKET, SO_REUSEADDR, &one, sizeof one) <
+        0)
+        goto fail_errno;
+    step = NULL;
+    if (bind(ctl->watch.fd, (struct sockaddr *)&sa, sizeof sa) < 0)
+        goto fail_errno;
+    step = "listen";
+    if (listen(ctl->watch.fd, (int)WSG_CTL_CLIENTS_MAX) < 0)
+        goto fail_errno;
+    step = "getsockname";
+    if (getsockname(ctl->watch.fd, (struct sockaddr *)&sa, &salen) < 0)
+        goto fail_errno;
+    format_addr(ctl->local, sizeof ctl->local, &sa);
+    step = "epoll";
+    r = wsg_loop_watch_add(ctl->loop, &ctl->watch, EPOLLIN);
+    if (r < 0)
+        goto fail;
+    t->state = ctl;
+    return 0;
+
+fail_errno:
+    r = -errno;
+fail:
+    wsg_transport_listen_error(err, errlen, "control", where, ep->port, step,
+                               r);
+    if (ctl) {
+        if (ctl->watch.fd >= 0)
+            close(ctl->watch.fd);
+        free(ctl);
+    }
+    t->state = NULL;
+    return r;
+}
+
+const struct wsg_transport_ops wsg_control_ops = {
+    .name = "control",
+    .open = ctl_open,
+    .close = ctl_close,
+    .handle = ctl_handle,
+    .describe = ctl_describe,
+    .settle = ctl_settle,
+};

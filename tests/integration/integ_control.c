@@ -1,0 +1,651 @@
+/*
+ * integ_control: the control channel (--control) and time control.
+ *
+ * - the ready line ends with control=127.0.0.1:PORT;
+ * - "state" is one valid JSON object with every documented key;
+ * - lockstep: paused, a homing from 55 mm advances only with "time step";
+ *   its trapezoid (100 mm/s, 150 mm/s^2: 0.667 s and 33.3 mm accelerating,
+ *   21.7 mm at speed) lasts 0.884 s, so no result after 800 ms of steps and
+ *   the result after 100 more; "time" reports the stepped time exactly;
+ * - a held part removed with "part none" is lost (41h = 3, 42h lost 1);
+ * - "fault temp-fault on" sets 40h bit 14 and refuses motions with
+ *   E_ACCESS_DENIED, "off" clears it; "fault power on" aborts a motion;
+ * - "time scale 10" runs a homing in well under the real-time duration; a
+ *   scale set while paused waits for "time resume"; --time-scale 5 is the
+ *   scale "state" reports;
+ * - "drop" ends every TCP connection, leaving the gripper in FAST STOP;
+ * - "reset" is a power cycle: not referenced, acceleration 150 again,
+ *   streams ended;
+ * - errors: an unknown command, bad arguments, a too long line; several
+ *   lines in one write are all answered, in order.
+ */
+#include "check.h"
+#include "emu.h"
+#include "wsg/axis.h"
+
+#include <arpa/inet.h>
+#include <errno.h>
+#include <netinet/in.h>
+#include <poll.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+static const char *const args[] = {"--tcp", "127.0.0.1:0", "--control",
+                                   "127.0.0.1:0", NULL};
+
+/* ---- a control client: lines over TCP ---- */
+
+struct ctl {
+    int fd;
+    char buf[8192];
+    size_t len;
+};
+
+static int ctl_open(struct ctl *c, const struct emu *e)
+{
+    char v[64];
+    struct sockaddr_in sa;
+    const char *colon;
+
+    c->len = 0;
+    c->fd = -1;
+    if (!emu_field(e, "control", v, sizeof v))
+        return -1;
+    colon = strrchr(v, ':');
+    if (!colon)
+        return -1;
+    memset(&sa, 0, sizeof sa);
+    sa.sin_family = AF_INET;
+    sa.sin_port = htons((uint16_t)atoi(colon + 1));
+    sa.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    c->fd = socket(AF_INET, SOCK_STREAM, 0);
+    if (c->fd < 0)
+        return -1;
+    if (connect(c->fd, (struct sockaddr *)&sa, sizeof sa) < 0) {
+        close(c->fd);
+        c->fd = -1;
+        return -1;
+    }
+    return 0;
+}
+
+static void ctl_close(struct ctl *c)
+{
+    if (c->fd >= 0)
+        close(c->fd);
+    c->fd = -1;
+}
+
+static int ctl_write(struct ctl *c, const char *s)
+{
+    size_t n = strlen(s);
+
+    return send(c->fd, s, n, MSG_NOSIGNAL) == (ssize_t)n ? 0 : -1;
+}
+
+/* The next line (without its newline) into out; 0, or -1 on timeout or
+ * end of stream. */
+static int ctl_line(struct ctl *c, char *out, size_t cap)
+{
+    double end = emu_now_ms() + EMU_REPLY_MS;
+
+    for (;;) {
+        char *nl = memchr(c->buf, '\n', c->len);
+
+        if (nl) {
+            size_t n = (size_t)(nl - c->buf);
+            size_t k = n < cap - 1 ? n : cap - 1;
+
+            memcpy(out, c->buf, k);
+            out[k] = '\0';
+            memmove(c->buf, nl + 1, c->len - n - 1);
+            c->len -= n + 1;
+            return 0;
+        }
+        double left = end - emu_now_ms();
+        if (left <= 0 || c->len == sizeof c->buf)
+            return -1;
+        struct pollfd p = {.fd = c->fd, .events = POLLIN};
+        if (poll(&p, 1, (int)left + 1) <= 0)
+            continue;
+        ssize_t r = recv(c->fd, c->buf + c->len, sizeof c->buf - c->len, 0);
+        if (r <= 0)
+            return -1;
+        c->len += (size_t)r;
+    }
+}
+
+/* Send one command line and read its answer. */
+static const char *ctl_cmd(struct ctl *c, const char *cmd)
+{
+    static char line[4096]; /* the test is single-threaded */
+    char out[512];
+
+    snprintf(out, sizeof out, "%s\n", cmd);
+    if (ctl_write(c, out) < 0 || ctl_line(c, line, sizeof line) < 0)
+        return "(no answer)";
+    return line;
+}
+
+static int is_ok(const char *ans)
+{
+    return strncmp(ans, "ok", 2) == 0 && (ans[2] == '\0' || ans[2] == ' ');
+}
+
+#define CMD_OK(c, cmd)                                                        \
+    do {                                                                      \
+        const char *ans_ = ctl_cmd((c), (cmd));                               \
+        if (!is_ok(ans_))                                                     \
+            fprintf(stderr, "%s -> %s\n", (cmd), ans_);                       \
+        CHECK(is_ok(ans_));                                                   \
+    } while (0)
+
+/* "ok S.FFFFFF" -> microseconds, exactly; -1 if it is not that. */
+static long long time_us(const char *ans)
+{
+    char *end;
+    long long s, f = 0;
+    int digits = 0;
+
+    if (strncmp(ans, "ok ", 3) != 0)
+        return -1;
+    s = strtoll(ans + 3, &end, 10);
+    if (*end == '.') {
+        for (end++; *end >= '0' && *end <= '9'; end++, digits++)
+            f = f * 10 + (*end - '0');
+    }
+    if (*end != '\0' || digits > 6)
+        return -1;
+    while (digits++ < 6)
+        f *= 10;
+    return s * 1000000 + f;
+}
+
+static long long ctl_time(struct ctl *c)
+{
+    return time_us(ctl_cmd(c, "time"));
+}
+
+/* ---- a minimal JSON checker: the grammar, nothing more ---- */
+
+static const char *json_value(const char *p);
+
+static const char *json_ws(const char *p)
+{
+    while (*p == ' ' || *p == '\t' || *p == '\n' || *p == '\r')
+        p++;
+    return p;
+}
+
+static const char *json_string(const char *p)
+{
+    if (*p++ != '"')
+        return NULL;
+    while (*p && *p != '"') {
+        if ((unsigned char)*p < 0x20)
+            return NULL;
+        if (*p == '\\') {
+            p++;
+            if (!*p)
+                return NULL;
+        }
+        p++;
+    }
+    return *p == '"' ? p + 1 : NULL;
+}
+
+static const char *json_number(const char *p)
+{
+    const char *s = p;
+
+    if (*p == '-')
+        p++;
+    if (*p == '0')
+        p++;
+    else if (*p >= '1' && *p <= '9')
+        while (*p >= '0' && *p <= '9')
+            p++;
+    else
+        return NULL;
+    if (*p == '.') {
+        p++;
+        if (!(*p >= '0' && *p <= '9'))
+            return NULL;
+        while (*p >= '0' && *p <= '9')
+            p++;
+    }
+    if (*p == 'e' || *p == 'E') {
+        p++;
+        if (*p == '+' || *p == '-')
+            p++;
+        if (!(*p >= '0' && *p <= '9'))
+            return NULL;
+        while (*p >= '0' && *p <= '9')
+            p++;
+    }
+    return p > s ? p : NULL;
+}
+
+static const char *json_seq(const char *p, char close, int object)
+{
+    p = json_ws(p + 1);
+    if (*p == close)
+        return p + 1;
+    for (;;) {
+        if (object) {
+            p = json_string(json_ws(p));
+            if (!p)
+                return NULL;
+            p = json_ws(p);
+            if (*p++ != ':')
+                return NULL;
+        }
+        p = json_value(p);
+        if (!p)
+            return NULL;
+        p = json_ws(p);
+        if (*p == close)
+            return p + 1;
+        if (*p++ != ',')
+            return NULL;
+    }
+}
+
+static const char *json_value(const char *p)
+{
+    p = json_ws(p);
+    switch (*p) {
+    case '{':
+        return json_seq(p, '}', 1);
+    case '[':
+        return json_seq(p, ']', 0);
+    case '"':
+        return json_string(p);
+    case 't':
+        return strncmp(p, "true", 4) == 0 ? p + 4 : NULL;
+    case 'f':
+        return strncmp(p, "false", 5) == 0 ? p + 5 : NULL;
+    case 'n':
+        return strncmp(p, "null", 4) == 0 ? p + 4 : NULL;
+    default:
+        return json_number(p);
+    }
+}
+
+static int json_valid_object(const char *p)
+{
+    p = json_ws(p);
+    if (*p != '{')
+        return 0;
+    p = json_value(p);
+    return p && *json_ws(p) == '\0';
+}
+
+/* The number after "key": in a flat search (keys are unique in state). */
+static double json_num(const char *json, const char *key)
+{
+    char pat[64];
+    const char *p;
+
+    snprintf(pat, sizeof pat, "\"%s\":", key);
+    p = strstr(json, pat);
+    return p ? strtod(p + strlen(pat), NULL) : -1e9;
+}
+
+/* The state's JSON, after "ok ". */
+static const char *ctl_state(struct ctl *c)
+{
+    const char *ans = ctl_cmd(c, "state");
+
+    return strncmp(ans, "ok ", 3) == 0 ? ans + 3 : "";
+}
+
+/* ---- gripper helpers ---- */
+
+static uint32_t flags_of(struct emu_client *c)
+{
+    uint32_t fl = 0;
+
+    CHECK(emu_get_flags(c, &fl) == 0);
+    return fl;
+}
+
+static int grasp_state_of(struct emu_client *c)
+{
+    struct emu_frame f;
+
+    if (emu_request(c, WSG_CMD_GET_GRASP_STATE, NULL, 0, &f, EMU_REPLY_MS) !=
+            WSG_E_SUCCESS ||
+        EMU_NPARAMS(&f) < 1)
+        return -1;
+    return EMU_PARAMS(&f)[0];
+}
+
+static int home(struct emu_client *c, uint8_t dir)
+{
+    int imm;
+
+    return emu_motion(c, WSG_CMD_HOMING, &dir, 1, 5000, &imm);
+}
+
+static int move_to(struct emu_client *c, float width, float speed)
+{
+    uint8_t p[16];
+    size_t n = emu_move_payload(p, 0, width, speed);
+    int imm;
+
+    return emu_motion(c, WSG_CMD_PREPOSITION, p, n, 10000, &imm);
+}
+
+/* ---- the tests ---- */
+
+static void test_ready_and_state(struct emu *e, struct ctl *k)
+{
+    char v[64];
+    const char *field = strstr(e->line, " control=");
+
+    CHECK(emu_field(e, "control", v, sizeof v) != NULL);
+    CHECK(strncmp(v, "127.0.0.1:", 10) == 0 && atoi(v + 10) > 0);
+    /* The last field of the line. */
+    CHECK(field && !strchr(field + 1, ' '));
+
+    const char *js = ctl_state(k);
+    static const char *const keys[] = {
+        "\"width\":",       "\"speed\":",
+        "\"force\":",       "\"temperature\":",
+        "\"flags\":",       "\"flag_names\":",
+        "\"grasp_state\":", "\"grasp_state_name\":",
+        "\"stats\":",       "\"total\":",
+        "\"no_part\":",     "\"lost_part\":",
+        "\"time\":"};
+    CHECK(json_valid_object(js));
+    for (size_t i = 0; i < sizeof keys / sizeof keys[0]; i++) {
+        if (!strstr(js, keys[i]))
+            fprintf(stderr, "state lacks %s: %s\n", keys[i], js);
+        CHECK(strstr(js, keys[i]) != NULL);
+    }
+    CHECK_NEAR(json_num(js, "width"), 55.0, 1e-6);
+    CHECK_EQ(json_num(js, "flags"), 0);
+    CHECK_EQ(json_num(js, "grasp_state"), 0);
+}
+
+static void test_errors(struct ctl *k)
+{
+    char line[512], big[400];
+
+    CHECK(strncmp(ctl_cmd(k, "frobnicate"), "error ", 6) == 0);
+    CHECK(strncmp(ctl_cmd(k, "part"), "error ", 6) == 0);
+    CHECK(strncmp(ctl_cmd(k, "part -3"), "error ", 6) == 0);
+    CHECK(strncmp(ctl_cmd(k, "part 20 0"), "error ", 6) == 0);
+    CHECK(strncmp(ctl_cmd(k, "obstacle wide"), "error ", 6) == 0);
+    CHECK(strncmp(ctl_cmd(k, "fault power maybe"), "error ", 6) == 0);
+    CHECK(strncmp(ctl_cmd(k, "fault gremlins on"), "error ", 6) == 0);
+    CHECK(strncmp(ctl_cmd(k, "time scale 0"), "error ", 6) == 0);
+    CHECK(strncmp(ctl_cmd(k, "time scale fast"), "error ", 6) == 0);
+    /* Stepping while running would race the timer. */
+    CHECK(strncmp(ctl_cmd(k, "time step 10"), "error ", 6) == 0);
+    CHECK(strncmp(ctl_cmd(k, "state now"), "error ", 6) == 0);
+
+    /* Too long: one error for the whole line, then business as usual. */
+    memset(big, 'x', sizeof big - 1);
+    big[sizeof big - 1] = '\0';
+    CHECK(strncmp(ctl_cmd(k, big), "error ", 6) == 0);
+    CHECK(is_ok(ctl_cmd(k, "time")));
+
+    /* Several lines in one write, answered in order; an empty line and
+     * CRLF line ends are fine. */
+    REQUIRE(ctl_write(k, "obstacle 30\r\n\nnope\nobstacle none\n") == 0);
+    REQUIRE(ctl_line(k, line, sizeof line) == 0);
+    CHECK(strcmp(line, "ok obstacle 30") == 0);
+    REQUIRE(ctl_line(k, line, sizeof line) == 0);
+    CHECK(strncmp(line, "error ", 6) == 0);
+    REQUIRE(ctl_line(k, line, sizeof line) == 0);
+    CHECK(strcmp(line, "ok obstacle none") == 0);
+}
+
+static void test_lockstep(struct emu_client *c, struct ctl *k)
+{
+    struct emu_frame f;
+    uint8_t dir = 0;
+
+    CMD_OK(k, "time pause");
+    long long t0 = ctl_time(k);
+    CHECK(t0 >= 0);
+
+    /* Paused means paused: real time passes, simulated time does not. */
+    emu_sleep_ms(50);
+    CHECK_EQ(ctl_time(k), t0);
+
+    REQUIRE(emu_request(c, WSG_CMD_HOMING, &dir, 1, NULL, EMU_REPLY_MS) ==
+            WSG_E_CMD_PENDING);
+    for (int i = 0; i < 8; i++) {
+        CHECK_EQ(time_us(ctl_cmd(k, "time step 100")),
+                 t0 + (i + 1) * 100000LL);
+        /* The steps ran before the answer: a result would be here. */
+        CHECK_EQ(emu_recv_id(c, WSG_CMD_HOMING, &f, 30), 0);
+    }
+    CHECK(flags_of(c) & WSG_SF_MOVING);
+    CHECK_EQ(time_us(ctl_cmd(k, "time step 100")), t0 + 900000LL);
+    CHECK_EQ(emu_recv_id(c, WSG_CMD_HOMING, &f, EMU_REPLY_MS), 1);
+    CHECK_EQ(f.status, WSG_E_SUCCESS);
+    CHECK_EQ(ctl_time(k), t0 + 900000LL);
+    CHECK_NEAR(json_num(ctl_state(k), "width"), 110.0, 1e-3);
+    CHECK(strstr(ctl_state(k), "\"paused\":true") != NULL);
+
+    /* A new scale while paused waits for the resume. */
+    CHECK(strcmp(ctl_cmd(k, "time scale 2"), "ok scale 2 paused") == 0);
+    emu_sleep_ms(20);
+    CHECK_EQ(ctl_time(k), t0 + 900000LL);
+    CMD_OK(k, "time scale 1");
+
+    CMD_OK(k, "time resume");
+    CHECK(strstr(ctl_state(k), "\"paused\":false") != NULL);
+}
+
+/* --time-scale sets the scale the channel reports and runs at. */
+static void test_option_scale(const char *exe)
+{
+    static const char *const a[] = {"--tcp",       "127.0.0.1:0",  "--control",
+                                    "127.0.0.1:0", "--time-scale", "5",
+                                    NULL};
+    struct emu e;
+    struct ctl k;
+
+    REQUIRE(emu_start(&e, exe, a) == 0);
+    REQUIRE(ctl_open(&k, &e) == 0);
+    CHECK(strstr(ctl_state(&k), "\"scale\":5") != NULL);
+    ctl_close(&k);
+    CHECK_EQ(emu_stop(&e), 0);
+}
+
+static void test_part_lost(struct emu_client *c, struct ctl *k)
+{
+    struct emu_frame f;
+    uint8_t p[16];
+    uint8_t keep = 0;
+    int imm;
+
+    CMD_OK(k, "part 40");
+    size_t n = emu_grasp_payload(p, 40.0f, 100.0f);
+    CHECK_EQ(emu_motion(c, WSG_CMD_GRASP, p, n, 5000, &imm), WSG_E_SUCCESS);
+    CHECK_EQ(grasp_state_of(c), WSG_GS_HOLDING);
+
+    CMD_OK(k, "part none");
+    int gs = -1;
+    for (int i = 0; i < 100 && gs != WSG_GS_PART_LOST; i++) {
+        gs = grasp_state_of(c);
+        if (gs != WSG_GS_PART_LOST)
+            emu_sleep_ms(10);
+    }
+    CHECK_EQ(gs, WSG_GS_PART_LOST);
+    REQUIRE(emu_request(c, WSG_CMD_GET_GRASP_STATS, &keep, 1, &f,
+                        EMU_REPLY_MS) == WSG_E_SUCCESS);
+    REQUIRE(EMU_NPARAMS(&f) == 8);
+    uint8_t *q = EMU_PARAMS(&f);
+    CHECK_EQ(q[0] | q[1] << 8 | q[2] << 16 | (uint32_t)q[3] << 24, 1);
+    CHECK_EQ(q[6] | q[7] << 8, 1); /* lost */
+    const char *js = ctl_state(k);
+    CHECK_EQ(json_num(js, "grasp_state"), WSG_GS_PART_LOST);
+    CHECK_EQ(json_num(js, "lost_part"), 1);
+    CHECK(strstr(js, "\"part_lost\"") != NULL);
+    /* The fingers snap on through where the part was; let them settle. */
+    CHECK(emu_wait_flags(c, WSG_SF_MOVING, 0, 5000, NULL) == 0);
+}
+
+static void test_faults(struct emu_client *c, struct ctl *k)
+{
+    uint8_t dir = 0;
+
+    CMD_OK(k, "fault temp-fault on");
+    CHECK(flags_of(c) & (1u << 14));
+    CHECK(json_num(ctl_state(k), "flags") >= (double)(1u << 14));
+    CHECK_EQ(emu_request(c, WSG_CMD_HOMING, &dir, 1, NULL, EMU_REPLY_MS),
+             WSG_E_ACCESS_DENIED);
+    CMD_OK(k, "fault temp-fault off");
+    CHECK_EQ(flags_of(c) & (1u << 14), 0);
+
+    CMD_OK(k, "fault temp-warning on");
+    CHECK(flags_of(c) & WSG_SF_TEMP_WARNING);
+    CMD_OK(k, "fault temp-warning off");
+    CHECK_EQ(flags_of(c) & WSG_SF_TEMP_WARNING, 0);
+
+    /* A power fault during a motion ends it. */
+    uint8_t p[16];
+    size_t n = emu_move_payload(p, 0, 100.0f, 10.0f);
+    struct emu_frame f;
+    int st = emu_request(c, WSG_CMD_PREPOSITION, p, n, NULL, EMU_REPLY_MS);
+    if (st != WSG_E_CMD_PENDING)
+        fprintf(stderr, "preposition: status %d, state %s\n", st,
+                ctl_state(k));
+    REQUIRE(st == WSG_E_CMD_PENDING);
+    emu_sleep_ms(50);
+    CMD_OK(k, "fault power on");
+    CHECK_EQ(emu_recv_id(c, WSG_CMD_PREPOSITION, &f, EMU_REPLY_MS), 1);
+    CHECK_EQ(f.status, WSG_E_CMD_ABORTED);
+    CHECK(flags_of(c) & WSG_SF_POWER_FAULT);
+    CHECK_EQ(emu_request(c, WSG_CMD_PREPOSITION, p, n, NULL, EMU_REPLY_MS),
+             WSG_E_ACCESS_DENIED);
+    CMD_OK(k, "fault power off");
+    uint32_t fl = flags_of(c);
+    CHECK_EQ(fl & WSG_SF_POWER_FAULT, 0);
+    /* The model may also FAST STOP on a power fault (its business, not
+     * the channel's): acknowledged here so the next test can move. */
+    if (fl & WSG_SF_FAST_STOP) {
+        static const uint8_t ack[3] = {'a', 'c', 'k'};
+        CHECK_EQ(
+            emu_request(c, WSG_CMD_ACK_FAST_STOP, ack, 3, NULL, EMU_REPLY_MS),
+            WSG_E_SUCCESS);
+    }
+}
+
+static void test_scale(struct emu_client *c, struct ctl *k)
+{
+    int st = move_to(c, 10.0f, 400.0f);
+    if (st != WSG_E_SUCCESS)
+        fprintf(stderr, "move: status %d, state %s\n", st, ctl_state(k));
+    REQUIRE(st == WSG_E_SUCCESS);
+    /* From 10 to 110 mm: 0.667 s accelerating over 33.3 mm, 66.7 mm at
+     * 100 mm/s: 1.333 s of simulated time. */
+    CMD_OK(k, "time scale 10");
+    CHECK(strstr(ctl_state(k), "\"scale\":10") != NULL);
+    long long s0 = ctl_time(k);
+    double t0 = emu_now_ms();
+    CHECK_EQ(home(c, WSG_HOME_POSITIVE), WSG_E_SUCCESS);
+    double dt = emu_now_ms() - t0;
+    long long ds = ctl_time(k) - s0;
+    printf("homing at scale 10: %.0f ms real, %lld us simulated\n", dt, ds);
+    CHECK(dt < 1333.0 / 2);
+    CHECK(ds >= 1333000);
+    CMD_OK(k, "time scale 1");
+}
+
+static void test_drop(struct emu *e, struct emu_client *c, struct ctl *k)
+{
+    struct emu_client m;
+    struct emu_frame f;
+
+    CHECK_EQ(flags_of(c) & WSG_SF_FAST_STOP, 0);
+    CHECK(strcmp(ctl_cmd(k, "drop"), "ok dropped 1") == 0);
+    /* The server closed: end of stream, not a timeout. */
+    CHECK_EQ(emu_recv(c, &f, EMU_REPLY_MS), -1);
+    CHECK(c->eof);
+    emu_close(c);
+
+    REQUIRE(emu_open(&m, e, &emu_tcp) == 0);
+    /* Applied by the model's next step, as for any close without 07h. */
+    CHECK(emu_wait_flags(&m, WSG_SF_FAST_STOP, WSG_SF_FAST_STOP, 1000, NULL) ==
+          0);
+    emu_close(&m);
+}
+
+static void test_reset(struct emu *e, struct ctl *k)
+{
+    struct emu_client m;
+    struct emu_frame f;
+    float acc = 0;
+    uint8_t p[4];
+    float v = 500.0f;
+    uint8_t ack[3] = {'a', 'c', 'k'};
+    uint8_t stream[3] = {1, 100, 0}; /* every 100 ms */
+
+    REQUIRE(emu_open(&m, e, &emu_tcp) == 0);
+    CHECK_EQ(
+        emu_request(&m, WSG_CMD_ACK_FAST_STOP, ack, 3, NULL, EMU_REPLY_MS),
+        WSG_E_SUCCESS);
+    memcpy(p, &v, 4); /* the test hosts are little-endian like the wire */
+    CHECK_EQ(
+        emu_request(&m, WSG_CMD_SET_ACCELERATION, p, 4, NULL, EMU_REPLY_MS),
+        WSG_E_SUCCESS);
+    CHECK(emu_get_float(&m, WSG_CMD_GET_ACCELERATION, &acc) == 0);
+    CHECK_NEAR(acc, 500.0, 0.01);
+    CHECK(flags_of(&m) & WSG_SF_REFERENCED);
+    CHECK_EQ(emu_request(&m, WSG_CMD_GET_WIDTH, stream, 3, NULL, EMU_REPLY_MS),
+             WSG_E_SUCCESS);
+    CHECK_EQ(emu_recv_id(&m, WSG_CMD_GET_WIDTH, &f, EMU_REPLY_MS), 1);
+
+    CMD_OK(k, "reset");
+    CHECK_EQ(flags_of(&m) & WSG_SF_REFERENCED, 0);
+    CHECK_EQ(json_num(ctl_state(k), "flags"), 0);
+    CHECK(emu_get_float(&m, WSG_CMD_GET_ACCELERATION, &acc) == 0);
+    CHECK_NEAR(acc, 150.0, 0.01);
+    /* The stream ended with the power cycle. */
+    emu_drop_kept(&m);
+    REQUIRE(emu_sync(&m, EMU_REPLY_MS) == 0);
+    emu_drop_kept(&m);
+    CHECK_EQ(emu_recv_id(&m, WSG_CMD_GET_WIDTH, &f, EMU_QUIET_MS), 0);
+    emu_close(&m);
+}
+
+int main(int argc, char **argv)
+{
+    const char *exe = emu_exe(argc, argv);
+    struct emu e;
+    struct emu_client c;
+    struct ctl k, k2;
+
+    REQUIRE(emu_start(&e, exe, args) == 0);
+    REQUIRE(ctl_open(&k, &e) == 0);
+    REQUIRE(emu_open(&c, &e, &emu_tcp) == 0);
+
+    test_ready_and_state(&e, &k);
+    /* A second control client at once. */
+    REQUIRE(ctl_open(&k2, &e) == 0);
+    CHECK(is_ok(ctl_cmd(&k2, "time")));
+    test_errors(&k2);
+    ctl_close(&k2);
+
+    test_lockstep(&c, &k);
+    test_part_lost(&c, &k);
+    test_faults(&c, &k);
+    test_scale(&c, &k);
+    test_drop(&e, &c, &k);
+    test_reset(&e, &k);
+
+    ctl_close(&k);
+    CHECK_EQ(emu_stop(&e), 0);
+
+    test_option_scale(exe);
+    TEST_EXIT();
+}

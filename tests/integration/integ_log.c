@@ -1,0 +1,195 @@
+/*
+ * integ_log: the communication log (--log FILE) as a user reads it.
+ *
+ * A client sends a Homing (pending, then its final result), a Loop, an
+ * unknown ID, a Loop with a bad checksum and a Get Opening Width. The log
+ * must show one line per packet in each direction with the peer, the
+ * command names, the status names of the replies and decoded parameters
+ * (the width as a float); lines appear in the file while the daemon runs
+ * (it flushes after each batch of events), and all of them after it
+ * stopped. Without --log no file is written, and a log that cannot be
+ * opened is an error at start.
+ */
+/* mkdtemp, fdopen */
+#define _POSIX_C_SOURCE 200809L
+
+#include "check.h"
+#include "emu.h"
+
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+static const char *exe;
+
+/* The whole file into buf (NUL-terminated); its length, or -1. */
+static long slurp(const char *path, char *buf, size_t cap)
+{
+    FILE *f = fopen(path, "r");
+    size_t n;
+
+    if (!f)
+        return -1;
+    n = fread(buf, 1, cap - 1, f);
+    buf[n] = '\0';
+    fclose(f);
+    return (long)n;
+}
+
+/* The first line that contains every one of the (NULL-terminated) parts;
+ * NULL if none does. The line is copied into out. */
+static const char *find_line(const char *text, const char *const *parts,
+                             char *out, size_t cap)
+{
+    const char *p = text;
+
+    while (*p) {
+        const char *end = strchr(p, '\n');
+        size_t n = end ? (size_t)(end - p) : strlen(p);
+        size_t i;
+        int ok = 1;
+
+        if (n < cap) {
+            memcpy(out, p, n);
+            out[n] = '\0';
+            for (i = 0; parts[i] && ok; i++)
+                ok = strstr(out, parts[i]) != NULL;
+            if (ok)
+                return out;
+        }
+        if (!end)
+            break;
+        p = end + 1;
+    }
+    return NULL;
+}
+
+static void expect(const char *text, const char *const *parts)
+{
+    char line[1024];
+
+    if (find_line(text, parts, line, sizeof line)) {
+        CHECK(1);
+        return;
+    }
+    CHECK(!"a log line with these parts");
+    for (size_t i = 0; parts[i]; i++)
+        fprintf(stderr, "  part: \"%s\"\n", parts[i]);
+}
+
+static void test_log(const char *dir)
+{
+    char path[512], port[64], peer[80], text[65536];
+    const char *args[] = {"--tcp", "127.0.0.1:0", "--log", path, NULL};
+    struct emu e;
+    struct emu_client c;
+    struct emu_frame f;
+    uint8_t pkt[32], home = 0;
+    size_t n;
+    int imm = -1;
+
+    snprintf(path, sizeof path, "%s/comm.log", dir);
+    REQUIRE(emu_start(&e, exe, args) == 0);
+    REQUIRE(emu_open(&c, &e, &emu_tcp) == 0);
+    CHECK_EQ(emu_motion(&c, WSG_CMD_HOMING, &home, 1, 10000, &imm),
+             WSG_E_SUCCESS);
+    CHECK_EQ(imm, WSG_E_CMD_PENDING);
+    CHECK_EQ(emu_request(&c, WSG_CMD_LOOP, "abc", 3, NULL, EMU_REPLY_MS),
+             WSG_E_SUCCESS);
+    CHECK_EQ(emu_request(&c, 0x7F, NULL, 0, NULL, EMU_REPLY_MS),
+             WSG_E_CMD_UNKNOWN);
+    n = wsg_frame_encode(pkt, sizeof pkt, WSG_CMD_LOOP, (const uint8_t *)"xy",
+                         2);
+    pkt[n - 1] ^= 0x5A;
+    REQUIRE(emu_send_raw(&c, pkt, n) == 0);
+    CHECK_EQ(emu_recv_id(&c, WSG_CMD_LOOP, &f, EMU_REPLY_MS), 1);
+    CHECK_EQ(f.status, WSG_E_CHECKSUM_ERROR);
+    CHECK_EQ(emu_request(&c, WSG_CMD_GET_WIDTH, NULL, 0, NULL, EMU_REPLY_MS),
+             WSG_E_SUCCESS);
+
+    /* Flushed after the batch that sent the reply: there while running
+     * (give the daemon a moment past its send). */
+    emu_sleep_ms(100);
+    REQUIRE(slurp(path, text, sizeof text) >= 0);
+    {
+        const char *const p[] = {" out 43h GetOpeningWidth E_SUCCESS width=",
+                                 NULL};
+        expect(text, p);
+    }
+    emu_close(&c);
+    CHECK_EQ(emu_stop(&e), 0);
+    REQUIRE(slurp(path, text, sizeof text) > 0);
+    printf("log:\n%s", text);
+
+    /* The peer as the transport names it: "tcp 127.0.0.1:PORT". */
+    REQUIRE(emu_field(&e, "tcp", port, sizeof port) != NULL);
+    snprintf(peer, sizeof peer, " tcp 127.0.0.1:");
+    {
+        const char *const p1[] = {peer, " in 20h Homing direction=default",
+                                  NULL};
+        const char *const p2[] = {peer, " out 20h Homing E_CMD_PENDING", NULL};
+        const char *const p3[] = {" out 20h Homing E_SUCCESS", NULL};
+        const char *const p4[] = {" in 06h Loop data=61 62 63", NULL};
+        const char *const p5[] = {" out 06h Loop E_SUCCESS data=61 62 63",
+                                  NULL};
+        const char *const p6[] = {" in 7Fh unknown", NULL};
+        const char *const p7[] = {" out 7Fh unknown E_CMD_UNKNOWN", NULL};
+        const char *const p8[] = {" in 06h Loop checksum-error", NULL};
+        const char *const p9[] = {" out 06h Loop E_CHECKSUM_ERROR", NULL};
+        /* Homing went to the positive end: the WSG 50's 110 mm. */
+        const char *const p10[] = {
+            " out 43h GetOpeningWidth E_SUCCESS width=110.000", NULL};
+        const char *const p11[] = {" in 43h GetOpeningWidth", NULL};
+        const char *const *all[] = {p1, p2, p3, p4,  p5, p6,
+                                    p7, p8, p9, p10, p11};
+
+        for (size_t i = 0; i < sizeof all / sizeof all[0]; i++)
+            expect(text, all[i]);
+    }
+    /* Every line: wall clock, simulated time, peer. */
+    {
+        const char *p = text;
+        int lines = 0;
+
+        while (*p) {
+            const char *end = strchr(p, '\n');
+
+            REQUIRE(end != NULL); /* whole lines only */
+            CHECK(end - p > 20 && p[2] == ':' && p[5] == ':' && p[8] == '.');
+            CHECK(strncmp(p + 12, " t=", 3) == 0);
+            lines++;
+            p = end + 1;
+        }
+        /* 4 requests + 1 bad packet in, 5 replies + 1 final result out;
+         * the emu helpers may add requests of their own, not fewer. */
+        CHECK(lines >= 11);
+    }
+    unlink(path);
+}
+
+static void test_bad_log(void)
+{
+    static const char *const args[] = {"--tcp", "127.0.0.1:0", "--log",
+                                       "/nonexistent/dir/comm.log", NULL};
+    char out[512], err[512];
+    int st = emu_run(exe, args, 5000, out, sizeof out, err, sizeof err);
+
+    printf("bad log: status %d, stderr \"%s\"\n", st, err);
+    CHECK(st != 0);
+    CHECK(strstr(err, "/nonexistent/dir/comm.log") != NULL);
+    CHECK(strstr(out, "ready") == NULL);
+}
+
+int main(int argc, char **argv)
+{
+    const char *tmp = getenv("TMPDIR");
+    char dir[256];
+
+    exe = emu_exe(argc, argv);
+    snprintf(dir, sizeof dir, "%s/wsgemu-log-XXXXXX", tmp ? tmp : "/tmp");
+    REQUIRE(mkdtemp(dir) != NULL);
+    test_log(dir);
+    test_bad_log();
+    rmdir(dir);
+    TEST_EXIT();
+}

@@ -1,0 +1,312 @@
+/*
+ * integ_settings: the gripper's web-page settings, from the command line
+ * and from a config file, each seen through the protocol the way a driver
+ * would see it.
+ *
+ * - --acceleration / --force-limit: 31h / 33h report them;
+ * - --serial / --tag: 50h's SN, 52h's text;
+ * - --homing-direction negative: a default homing ends at 0 mm;
+ * - --model wsg32: 53h's stroke is 68 mm; --part 40: a grasp at 40 mm holds;
+ * - --time-scale and crc on|off are taken;
+ * - --config FILE gives the same results; an option overrides the file,
+ *   wherever --config stands on the command line;
+ * - bad values exit 2 naming the valid range; a bad file line exits 2
+ *   naming FILE:LINE.
+ */
+/* mkstemp, fdopen */
+#define _POSIX_C_SOURCE 200809L
+
+#include "check.h"
+#include "emu.h"
+
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+static const char *exe;
+
+/* A temporary file with text; path gets its name. */
+static void write_file(char *path, size_t cap, const char *text)
+{
+    const char *dir = getenv("TMPDIR");
+    FILE *f;
+    int fd;
+
+    snprintf(path, cap, "%s/wsgemu-settings-XXXXXX", dir ? dir : "/tmp");
+    fd = mkstemp(path);
+    REQUIRE(fd >= 0);
+    f = fdopen(fd, "w");
+    REQUIRE(f != NULL);
+    fputs(text, f);
+    fclose(f);
+}
+
+static float get_float(struct emu_client *c, uint8_t id)
+{
+    float v = -1.0f;
+
+    CHECK_EQ(emu_get_float(c, id, &v), 0);
+    return v;
+}
+
+/* The settings of the first group, however they were given. */
+static void check_group1(const char *const *args)
+{
+    struct emu e;
+    struct emu_client c;
+    struct emu_frame f;
+    uint8_t dir = 0;
+    int imm = -1;
+
+    REQUIRE(emu_start(&e, exe, args) == 0);
+    REQUIRE(emu_open(&c, &e, &emu_tcp) == 0);
+    CHECK_NEAR(get_float(&c, WSG_CMD_GET_ACCELERATION), 200.0, 1e-3);
+    CHECK_NEAR(get_float(&c, WSG_CMD_GET_FORCE_LIMIT), 30.0, 1e-3);
+    CHECK_EQ(
+        emu_request(&c, WSG_CMD_GET_SYSTEM_INFO, NULL, 0, &f, EMU_REPLY_MS),
+        WSG_E_SUCCESS);
+    CHECK_EQ(EMU_NPARAMS(&f), 8);
+    CHECK_EQ(wsg_get_u32(EMU_PARAMS(&f) + 4), 1234);
+    CHECK_EQ(
+        emu_request(&c, WSG_CMD_GET_DEVICE_TAG, NULL, 0, &f, EMU_REPLY_MS),
+        WSG_E_SUCCESS);
+    CHECK_EQ(EMU_NPARAMS(&f), 6);
+    CHECK(memcmp(EMU_PARAMS(&f), "cell 4", 6) == 0);
+    /* Homing in the default direction (0) goes the configured way. */
+    CHECK_EQ(emu_motion(&c, WSG_CMD_HOMING, &dir, 1, 10000, &imm),
+             WSG_E_SUCCESS);
+    CHECK_EQ(imm, WSG_E_CMD_PENDING);
+    CHECK_NEAR(get_float(&c, WSG_CMD_GET_WIDTH), 0.0, 0.01);
+    emu_close(&c);
+    CHECK_EQ(emu_stop(&e), 0);
+}
+
+/* The second group: another model, a part between the fingers. */
+static void check_group2(const char *const *args)
+{
+    struct emu e;
+    struct emu_client c;
+    struct emu_frame f;
+    uint8_t dir = 0, p[8];
+    size_t n;
+    int imm = -1;
+
+    REQUIRE(emu_start(&e, exe, args) == 0);
+    REQUIRE(emu_open(&c, &e, &emu_tcp) == 0);
+    CHECK_EQ(
+        emu_request(&c, WSG_CMD_GET_SYSTEM_LIMITS, NULL, 0, &f, EMU_REPLY_MS),
+        WSG_E_SUCCESS);
+    CHECK_EQ(EMU_NPARAMS(&f), 32);
+    CHECK_NEAR(wsg_get_f32(EMU_PARAMS(&f)), 68.0, 1e-3);
+    CHECK_EQ(emu_motion(&c, WSG_CMD_HOMING, &dir, 1, 10000, &imm),
+             WSG_E_SUCCESS);
+    n = emu_grasp_payload(p, 40.0f, 100.0f);
+    CHECK_EQ(emu_motion(&c, WSG_CMD_GRASP, p, n, 10000, &imm), WSG_E_SUCCESS);
+    CHECK_EQ(imm, WSG_E_CMD_PENDING);
+    CHECK_EQ(
+        emu_request(&c, WSG_CMD_GET_GRASP_STATE, NULL, 0, &f, EMU_REPLY_MS),
+        WSG_E_SUCCESS);
+    CHECK_EQ(EMU_PARAMS(&f)[0], 4); /* HOLDING */
+    emu_close(&c);
+    CHECK_EQ(emu_stop(&e), 0);
+}
+
+static void test_options(void)
+{
+    static const char *const g1[] = {"--tcp",
+                                     "127.0.0.1:0",
+                                     "--acceleration",
+                                     "200",
+                                     "--force-limit",
+                                     "30",
+                                     "--serial",
+                                     "1234",
+                                     "--tag",
+                                     "cell 4",
+                                     "--homing-direction",
+                                     "negative",
+                                     "--time-scale",
+                                     "2",
+                                     "--crc",
+                                     "on",
+                                     NULL};
+    static const char *const g2[] = {
+        "--tcp", "127.0.0.1:0", "--model", "wsg32", "--part", "40", NULL};
+
+    check_group1(g1);
+    check_group2(g2);
+}
+
+static void test_config(void)
+{
+    char path[256], path2[256];
+    const char *g1[] = {"--config", path, NULL};
+    const char *g2[] = {"--config", path2, NULL};
+
+    write_file(path, sizeof path,
+               "# settings of integ_settings\n"
+               "\n"
+               "tcp = 127.0.0.1:0\n"
+               "  acceleration=200  \n"
+               "force-limit = 30\n"
+               "serial = 1234\n"
+               "tag = cell 4\n"
+               "homing-direction = negative\n"
+               "no-crc = off\n"
+               "time-scale = 1\n");
+    write_file(path2, sizeof path2,
+               "tcp = 127.0.0.1:0\nmodel = wsg32\npart = 40:50\n");
+    check_group1(g1);
+    check_group2(g2);
+    unlink(path);
+    unlink(path2);
+}
+
+/* An option beats the file, before or after --config. */
+static void test_override(void)
+{
+    char path[256];
+    const char *after[] = {"--config", path, "--acceleration", "300", NULL};
+    const char *before[] = {"--acceleration", "300", "--config", path, NULL};
+    const char *const *runs[] = {after, before};
+    size_t i;
+
+    write_file(path, sizeof path,
+               "tcp = 127.0.0.1:0\nacceleration = 200\nno-crc = on\n");
+    for (i = 0; i < 2; i++) {
+        struct emu e;
+        struct emu_client c;
+
+        REQUIRE(emu_start(&e, exe, runs[i]) == 0);
+        REQUIRE(emu_open(&c, &e, &emu_tcp) == 0);
+        CHECK_NEAR(get_float(&c, WSG_CMD_GET_ACCELERATION), 300.0, 1e-3);
+        emu_close(&c);
+        CHECK_EQ(emu_stop(&e), 0);
+    }
+    /* no-crc = on from the file: a wrong checksum passes... */
+    {
+        struct emu e;
+        struct emu_client c;
+        uint8_t pkt[32];
+        size_t n;
+        const char *args[] = {"--config", path, NULL};
+        const char *args_crc[] = {"--config", path, "--crc", "on", NULL};
+        struct emu_frame f;
+
+        n = wsg_frame_encode(pkt, sizeof pkt, WSG_CMD_LOOP,
+                             (const uint8_t *)"ab", 2);
+        pkt[n - 1] ^= 0x5A;
+        REQUIRE(emu_start(&e, exe, args) == 0);
+        REQUIRE(emu_open(&c, &e, &emu_tcp) == 0);
+        REQUIRE(emu_send_raw(&c, pkt, n) == 0);
+        CHECK_EQ(emu_recv_id(&c, WSG_CMD_LOOP, &f, EMU_REPLY_MS), 1);
+        CHECK_EQ(f.status, WSG_E_SUCCESS);
+        emu_close(&c);
+        CHECK_EQ(emu_stop(&e), 0);
+        /* ... unless --crc on overrides it. */
+        REQUIRE(emu_start(&e, exe, args_crc) == 0);
+        REQUIRE(emu_open(&c, &e, &emu_tcp) == 0);
+        REQUIRE(emu_send_raw(&c, pkt, n) == 0);
+        CHECK_EQ(emu_recv_id(&c, WSG_CMD_LOOP, &f, EMU_REPLY_MS), 1);
+        CHECK_EQ(f.status, WSG_E_CHECKSUM_ERROR);
+        emu_close(&c);
+        CHECK_EQ(emu_stop(&e), 0);
+    }
+    unlink(path);
+}
+
+/* Exit status 2, nothing on stdout, and stderr containing want. */
+static void bad(const char *const *args, const char *want)
+{
+    char out[512], err[1024];
+    int st = emu_run(exe, args, 5000, out, sizeof out, err, sizeof err);
+
+    printf("%s %s: status %d, stderr \"%s\"\n", args[0],
+           args[1] ? args[1] : "", st, err);
+    CHECK_EQ(st, 2);
+    CHECK(strstr(out, "ready") == NULL);
+    CHECK(strstr(err, want) != NULL);
+    if (!strstr(err, want))
+        fprintf(stderr, "  expected \"%s\" in it\n", want);
+}
+
+static void test_bad_values(void)
+{
+    static const char *const acc[] = {"--acceleration", "6000", NULL};
+    static const char *const acc32[] = {"--model", "wsg32", "--acceleration",
+                                        "50", NULL};
+    static const char *const force[] = {"--force-limit", "100", NULL};
+    static const char *const force25[] = {"--force-limit", "30", "--model",
+                                          "wsg25", NULL};
+    static const char *const nan_[] = {"--force-limit", "nan", NULL};
+    static const char *const dir[] = {"--homing-direction", "up", NULL};
+    static const char *const tag[] = {
+        "--tag",
+        "01234567890123456789012345678901234567890123456789012345678901234",
+        NULL};
+    static const char *const tag2[] = {"--tag", "tab\there", NULL};
+    static const char *const serial[] = {"--serial", "-1", NULL};
+    static const char *const serial2[] = {"--serial", "4294967296", NULL};
+    static const char *const part[] = {"--part", "200", NULL};
+    static const char *const part2[] = {"--part", "20:0", NULL};
+    static const char *const scale[] = {"--time-scale", "0", NULL};
+    static const char *const clamp[] = {"--clamping-travel", "-1", NULL};
+    static const char *const tol[] = {"--width-tolerance", "111", NULL};
+    static const char *const crc[] = {"--crc", "maybe", NULL};
+    static const char *const ctl[] = {"--control", "localhost", NULL};
+    static const char *const nofile[] = {"--config", "/nonexistent/wsg.conf",
+                                         NULL};
+
+    bad(acc, "100..5000");
+    bad(acc32, "100..5000");
+    bad(force, "5..80");
+    bad(force25, "5..20");
+    bad(nan_, "--force-limit");
+    bad(dir, "--homing-direction");
+    bad(tag, "--tag");
+    bad(tag2, "--tag");
+    bad(serial, "--serial");
+    bad(serial2, "--serial");
+    bad(part, "0..110");
+    bad(part2, "--part");
+    bad(scale, "--time-scale");
+    bad(clamp, "--clamping-travel");
+    bad(tol, "0..110");
+    bad(crc, "--crc");
+    bad(ctl, "--control");
+    bad(nofile, "/nonexistent/wsg.conf");
+}
+
+static void bad_file(const char *text, const char *want_suffix)
+{
+    char path[256], want[320];
+    const char *args[] = {"--config", path, NULL};
+
+    write_file(path, sizeof path, text);
+    snprintf(want, sizeof want, "%s:%s", path, want_suffix);
+    bad(args, want);
+    unlink(path);
+}
+
+static void test_bad_files(void)
+{
+    bad_file("# ok\nmodel = wsg32\nacceleration = fast\n", "3: acceleration");
+    bad_file("model = wsg32\nbogus = 1\n", "2: unknown setting 'bogus'");
+    bad_file("tcp 127.0.0.1:0\n", "1: expected 'key = value'");
+    bad_file("config = other.conf\n", "1: unknown setting 'config'");
+    /* Range errors are found once the model is known, and still name the
+     * line the value came from. */
+    bad_file("\n\nforce-limit = 60\nmodel = wsg25\n", "3: force-limit");
+    bad_file("no-crc = perhaps\n", "1: no-crc");
+}
+
+int main(int argc, char **argv)
+{
+    exe = emu_exe(argc, argv);
+    test_options();
+    test_config();
+    test_override();
+    test_bad_values();
+    test_bad_files();
+    TEST_EXIT();
+}
