@@ -516,6 +516,28 @@ static void test_overheating(void)
     CHECK_NEAR(t.dev.axis.temperature, 25.0, 1e-9);
 }
 
+/* A power cycle during a motion: it ends E_CMD_ABORTED, the gripper is
+ * not referenced, the session settings are the defaults again. */
+static void test_reset(void)
+{
+    struct tdev t;
+
+    tdev_init(&t);
+    CHECK_EQ(tdev_home(&t, 0), WSG_E_SUCCESS);
+    CHECK_EQ(tdev_cmd1f(&t, WSG_CMD_SET_ACCELERATION, 500.0f), WSG_E_SUCCESS);
+    CHECK_EQ(tdev_move(&t, 0, 10.0f, 20.0f), WSG_E_CMD_PENDING);
+    tdev_steps(&t, 100);
+    tdev_clear(&t);
+    wsg_device_reset(&t.dev);
+    REQUIRE(t.sess[0].n == 1);
+    CHECK_EQ(tdev_last(&t)->id, WSG_CMD_PREPOSITION);
+    CHECK_EQ(tdev_last(&t)->status, WSG_E_CMD_ABORTED);
+    CHECK_EQ(tdev_flags(&t) & (WSG_SF_REFERENCED | WSG_SF_MOVING), 0);
+    CHECK_EQ(tdev_getf(&t, WSG_CMD_GET_ACCELERATION), 150.0f);
+    tdev_steps(&t, 100);
+    CHECK_EQ(t.sess[0].n, 3); /* nothing more came */
+}
+
 int main(void)
 {
     test_durations();
@@ -531,5 +553,6 @@ int main(void)
     test_homing_into_obstacle();
     test_fault_consequences();
     test_overheating();
+    test_reset();
     TEST_EXIT();
 }

@@ -150,6 +150,15 @@ static int wsg_profile_eval(const struct wsg_profile *pr, double *x, double *v)
     return 0;
 }
 
+static void wsg_axis_done(struct wsg_axis *ax, const struct wsg_motion *m,
+                          uint16_t status)
+{
+    if (m->kind == WSG_MOTION_SNAP || m->kind == WSG_MOTION_NONE)
+        return;
+    if (ax->on_done)
+        ax->on_done(ax->done_ctx, m->tag, m->cmd_id, status);
+}
+
 void wsg_axis_init(struct wsg_axis *ax, const struct wsg_axis_config *cfg,
                    wsg_axis_done_fn on_done, void *ctx)
 {
@@ -166,6 +175,10 @@ void wsg_axis_init(struct wsg_axis *ax, const struct wsg_axis_config *cfg,
 
 void wsg_axis_reset(struct wsg_axis *ax)
 {
+    /* A power cycle ends what runs, and whoever waits for it hears so. */
+    wsg_axis_done(ax, &ax->motion, WSG_E_CMD_ABORTED);
+    wsg_axis_done(ax, &ax->req_motion, WSG_E_CMD_ABORTED);
+    wsg_axis_done(ax, &ax->req_cancelled, WSG_E_CMD_ABORTED);
     ax->speed = 0.0;
     ax->force = 0.0;
     ax->referenced = 0;
@@ -183,15 +196,6 @@ void wsg_axis_reset(struct wsg_axis *ax)
     ax->req_fast_stop = ax->req_ack = ax->req_stop = 0;
     memset(&ax->req_motion, 0, sizeof ax->req_motion);
     memset(&ax->req_cancelled, 0, sizeof ax->req_cancelled);
-}
-
-static void wsg_axis_done(struct wsg_axis *ax, const struct wsg_motion *m,
-                          uint16_t status)
-{
-    if (m->kind == WSG_MOTION_SNAP || m->kind == WSG_MOTION_NONE)
-        return;
-    if (ax->on_done)
-        ax->on_done(ax->done_ctx, m->tag, m->cmd_id, status);
 }
 
 /* A position in the world (part, obstacle, end stops) as the gripper
