@@ -149,6 +149,7 @@ static void usage(FILE *f)
         "\n"
         "When every interface is open, one line is printed on stdout:\n"
         "  ready tcp=ADDR:PORT udp=ADDR:PORT>REMOTE pty=PATH can=IFACE:ID\n"
+            "        control=ADDR:PORT\n"
         "(the fields of the open interfaces only).\n"
         "SIGINT or SIGTERM stops the emulator with exit status 0.\n",
         WSG_STEP_US_MIN, WSG_STEP_US_MAX, WSG_STEP_US_DEFAULT);
