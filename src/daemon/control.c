@@ -33,7 +33,6 @@
 
 #include "outq.h"
 
-#define WSG_CTL_ADDR_LEN   (INET_ADDRSTRLEN + 6)
 #define WSG_CTL_READ_CHUNK 1024u
 #define WSG_CTL_REPLY_MAX  2048u
 #define WSG_CTL_ARGS_MAX   4
@@ -60,18 +59,9 @@ struct wsg_ctl {
     struct wsg_device *dev;
     unsigned nclients;
     unsigned ndead;
-    char local[WSG_CTL_ADDR_LEN];
+    char local[WSG_ADDR_LEN];
     struct wsg_ctl_client *clients[WSG_CTL_CLIENTS_MAX];
 };
-
-static void format_addr(char *buf, size_t len, const struct sockaddr_in *sa)
-{
-    char ip[INET_ADDRSTRLEN];
-
-    if (!inet_ntop(AF_INET, &sa->sin_addr, ip, sizeof ip))
-        strcpy(ip, "?");
-    snprintf(buf, len, "%s:%u", ip, (unsigned)ntohs(sa->sin_port));
-}
 
 static void client_kill(struct wsg_ctl_client *c, const char *why)
 {
@@ -657,66 +647,35 @@ static int ctl_open(struct wsg_transport *t,
                     const struct wsg_transport_env *env, char *err,
                     size_t errlen)
 {
-    const struct wsg_endpoint *ep = &env->opt->control;
-    struct wsg_ctl *ctl;
-    struct sockaddr_in sa;
-    socklen_t salen = sizeof sa;
-    char where[WSG_CTL_ADDR_LEN];
-    const char *step = "setup";
-    int one = 1;
+    struct wsg_ctl *ctl = calloc(1, sizeof *ctl);
     int r;
 
-    memset(&sa, 0, sizeof sa);
-    sa.sin_family = AF_INET;
-    memcpy(&sa.sin_addr.s_addr, ep->addr, 4);
-    sa.sin_port = htons(ep->port);
-    format_addr(where, sizeof where, &sa);
-
-    ctl = calloc(1, sizeof *ctl);
     if (!ctl) {
-        r = -ENOMEM;
-        goto fail;
+        snprintf(err, errlen, "cannot listen on control: %s",
+                 strerror(ENOMEM));
+        return -ENOMEM;
     }
     ctl->loop = env->loop;
     ctl->dev = env->dev;
     ctl->watch.owner = t;
-    step = "socket";
-    ctl->watch.fd =
-        socket(AF_INET, SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
-    if (ctl->watch.fd < 0)
-        goto fail_errno;
-    /* A restarted emulator must not wait out TIME_WAIT. */
-    step = "SO_REUSEADDR";
-    if (setsockopt(ctl->watch.fd, SOL_SOCKET, SO_REUSEADDR, &one, sizeof one) <
-        0)
-        goto fail_errno;
-    step = NULL;
-    if (bind(ctl->watch.fd, (struct sockaddr *)&sa, sizeof sa) < 0)
-        goto fail_errno;
-    step = "listen";
-    if (listen(ctl->watch.fd, (int)WSG_CTL_CLIENTS_MAX) < 0)
-        goto fail_errno;
-    step = "getsockname";
-    if (getsockname(ctl->watch.fd, (struct sockaddr *)&sa, &salen) < 0)
-        goto fail_errno;
-    format_addr(ctl->local, sizeof ctl->local, &sa);
-    step = "epoll";
-    r = wsg_loop_watch_add(ctl->loop, &ctl->watch, EPOLLIN);
+    r = wsg_transport_listen_tcp(&env->opt->control, (int)WSG_CTL_CLIENTS_MAX,
+                                 "control", ctl->local, sizeof ctl->local, err,
+                                 errlen);
     if (r < 0)
         goto fail;
+    ctl->watch.fd = r;
+    r = wsg_loop_watch_add(ctl->loop, &ctl->watch, EPOLLIN);
+    if (r < 0) {
+        snprintf(err, errlen, "cannot listen on control %s: epoll: %s",
+                 ctl->local, strerror(-r));
+        close(ctl->watch.fd);
+        goto fail;
+    }
     t->state = ctl;
     return 0;
 
-fail_errno:
-    r = -errno;
 fail:
-    wsg_transport_listen_error(err, errlen, "control", where, ep->port, step,
-                               r);
-    if (ctl) {
-        if (ctl->watch.fd >= 0)
-            close(ctl->watch.fd);
-        free(ctl);
-    }
+    free(ctl);
     t->state = NULL;
     return r;
 }

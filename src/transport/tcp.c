@@ -43,7 +43,6 @@
 #define WSG_TCP_READS_PER_EVENT   16
 #define WSG_TCP_ACCEPTS_PER_EVENT 16
 #define WSG_TCP_BACKLOG           64
-#define WSG_TCP_ADDR_LEN          (INET_ADDRSTRLEN + 6)
 
 struct wsg_tcp;
 
@@ -53,7 +52,7 @@ struct wsg_tcp_conn {
     unsigned slot;
     int dead;
     uint32_t events; /* as registered with epoll */
-    char peer[WSG_TCP_ADDR_LEN];
+    char peer[WSG_ADDR_LEN];
     struct wsg_parser parser;
     struct wsg_session session;
     struct wsg_outq out; /* last: its buffer needs no initial value */
@@ -72,18 +71,9 @@ struct wsg_tcp {
     uint32_t next_gen;
     unsigned nconns;
     unsigned ndead;
-    char local[WSG_TCP_ADDR_LEN];
+    char local[WSG_ADDR_LEN];
     struct wsg_tcp_conn *slots[WSG_TCP_CONN_MAX];
 };
-
-static void format_addr(char *buf, size_t len, const struct sockaddr_in *sa)
-{
-    char ip[INET_ADDRSTRLEN];
-
-    if (!inet_ntop(AF_INET, &sa->sin_addr, ip, sizeof ip))
-        strcpy(ip, "?");
-    snprintf(buf, len, "%s:%u", ip, (unsigned)ntohs(sa->sin_port));
-}
 
 static void conn_kill(struct wsg_tcp_conn *c, const char *why)
 {
@@ -241,12 +231,12 @@ static void conn_accept(struct wsg_tcp *tcp, int fd,
                         const struct sockaddr_in *peer)
 {
     struct wsg_tcp_conn *c;
-    char name[WSG_TCP_ADDR_LEN];
+    char name[WSG_ADDR_LEN];
     int one = 1;
     int slot;
     int r;
 
-    format_addr(name, sizeof name, peer);
+    wsg_transport_format_addr(name, sizeof name, peer);
     slot = free_slot(tcp);
     if (slot < 0) {
         /* Accepted only to be closed at once: the client sees a clean
@@ -427,73 +417,39 @@ static int tcp_open(struct wsg_transport *t,
                     const struct wsg_transport_env *env, char *err,
                     size_t errlen)
 {
-    const struct wsg_endpoint *ep = &env->opt->tcp;
-    struct wsg_tcp *tcp;
-    struct sockaddr_in sa;
-    socklen_t salen = sizeof sa;
-    char where[WSG_TCP_ADDR_LEN];
-    const char *step = "socket";
-    int one = 1;
+    struct wsg_tcp *tcp = calloc(1, sizeof *tcp);
     int r;
 
-    memset(&sa, 0, sizeof sa);
-    sa.sin_family = AF_INET;
-    memcpy(&sa.sin_addr.s_addr, ep->addr, 4);
-    sa.sin_port = htons(ep->port);
-    format_addr(where, sizeof where, &sa);
-
-    tcp = calloc(1, sizeof *tcp);
     if (!tcp) {
-        r = -ENOMEM;
-        step = "setup";
-        goto fail;
+        snprintf(err, errlen, "cannot listen on tcp: %s", strerror(ENOMEM));
+        return -ENOMEM;
     }
-    t->state = tcp;
     tcp->t = t;
     tcp->loop = env->loop;
     tcp->dev = env->dev;
     tcp->tag_base = t->tag_base;
     tcp->check_crc = env->opt->check_crc;
-    tcp->next_gen = 0;
     tcp->watch.owner = t;
     tcp->spare_fd = open("/dev/null", O_RDONLY | O_CLOEXEC);
-    tcp->watch.fd =
-        socket(AF_INET, SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
-    if (tcp->watch.fd < 0)
-        goto fail_errno;
-    /* A restarted emulator must not wait out TIME_WAIT of its previous
-     * run's connections. */
-    step = "SO_REUSEADDR";
-    if (setsockopt(tcp->watch.fd, SOL_SOCKET, SO_REUSEADDR, &one, sizeof one) <
-        0)
-        goto fail_errno;
-    step = NULL; /* the usual failure: the reason says it all */
-    if (bind(tcp->watch.fd, (struct sockaddr *)&sa, sizeof sa) < 0)
-        goto fail_errno;
-    step = "listen";
-    if (listen(tcp->watch.fd, WSG_TCP_BACKLOG) < 0)
-        goto fail_errno;
-    step = "getsockname";
-    if (getsockname(tcp->watch.fd, (struct sockaddr *)&sa, &salen) < 0)
-        goto fail_errno;
-    format_addr(tcp->local, sizeof tcp->local, &sa);
-    step = "epoll";
-    r = wsg_loop_watch_add(tcp->loop, &tcp->watch, EPOLLIN);
+    r = wsg_transport_listen_tcp(&env->opt->tcp, WSG_TCP_BACKLOG, "tcp",
+                                 tcp->local, sizeof tcp->local, err, errlen);
     if (r < 0)
         goto fail;
+    tcp->watch.fd = r;
+    r = wsg_loop_watch_add(tcp->loop, &tcp->watch, EPOLLIN);
+    if (r < 0) {
+        snprintf(err, errlen, "cannot listen on tcp %s: epoll: %s", tcp->local,
+                 strerror(-r));
+        close(tcp->watch.fd);
+        goto fail;
+    }
+    t->state = tcp;
     return 0;
 
-fail_errno:
-    r = -errno;
 fail:
-    wsg_transport_listen_error(err, errlen, "tcp", where, ep->port, step, r);
-    if (tcp) {
-        if (tcp->watch.fd >= 0)
-            close(tcp->watch.fd);
-        if (tcp->spare_fd >= 0)
-            close(tcp->spare_fd);
-        free(tcp);
-    }
+    if (tcp->spare_fd >= 0)
+        close(tcp->spare_fd);
+    free(tcp);
     t->state = NULL;
     return r;
 }

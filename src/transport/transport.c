@@ -1,14 +1,21 @@
 /*
  * What the daemon does with all transports at once: route a session tag to
  * the transport that issued it, visit every session (stream polling, the
- * idle check), finish deferred closes, and build the ready line from the
- * list of open transports.
+ * idle check), finish deferred closes, build the ready line from the list
+ * of open transports, and open the TCP listeners (the interface and the
+ * control channel).
  */
+#define _GNU_SOURCE
+
 #include "transport.h"
 
+#include <arpa/inet.h>
 #include <errno.h>
+#include <netinet/in.h>
 #include <stdio.h>
 #include <string.h>
+#include <sys/socket.h>
+#include <unistd.h>
 
 struct wsg_session *wsg_transport_lookup(struct wsg_transport *ts, size_t n,
                                          uint32_t tag)
@@ -80,4 +87,56 @@ void wsg_transport_listen_error(char *buf, size_t len, const char *proto,
     else
         snprintf(buf, len, "cannot listen on %s %s: %s: %s", proto, where,
                  step, strerror(-err));
+}
+
+void wsg_transport_format_addr(char *buf, size_t len,
+                               const struct sockaddr_in *sa)
+{
+    char ip[INET_ADDRSTRLEN];
+
+    if (!inet_ntop(AF_INET, &sa->sin_addr, ip, sizeof ip))
+        strcpy(ip, "?");
+    snprintf(buf, len, "%s:%u", ip, (unsigned)ntohs(sa->sin_port));
+}
+
+int wsg_transport_listen_tcp(const struct wsg_endpoint *ep, int backlog,
+                             const char *proto, char *local, size_t locallen,
+                             char *err, size_t errlen)
+{
+    struct sockaddr_in sa;
+    socklen_t salen = sizeof sa;
+    char where[WSG_ADDR_LEN];
+    const char *step = "socket";
+    int one = 1;
+    int fd, r;
+
+    memset(&sa, 0, sizeof sa);
+    sa.sin_family = AF_INET;
+    memcpy(&sa.sin_addr.s_addr, ep->addr, 4);
+    sa.sin_port = htons(ep->port);
+    wsg_transport_format_addr(where, sizeof where, &sa);
+    fd = socket(AF_INET, SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
+    if (fd < 0)
+        goto fail;
+    step = "SO_REUSEADDR";
+    if (setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &one, sizeof one) < 0)
+        goto fail;
+    step = NULL; /* the usual failure: the reason says it all */
+    if (bind(fd, (struct sockaddr *)&sa, sizeof sa) < 0)
+        goto fail;
+    step = "listen";
+    if (listen(fd, backlog) < 0)
+        goto fail;
+    step = "getsockname";
+    if (getsockname(fd, (struct sockaddr *)&sa, &salen) < 0)
+        goto fail;
+    wsg_transport_format_addr(local, locallen, &sa);
+    return fd;
+
+fail:
+    r = -errno;
+    wsg_transport_listen_error(err, errlen, proto, where, ep->port, step, r);
+    if (fd >= 0)
+        close(fd);
+    return r;
 }

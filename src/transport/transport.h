@@ -77,6 +77,21 @@ extern const struct wsg_transport_ops wsg_can_ops;
  * that it ends the ready line. */
 extern const struct wsg_transport_ops wsg_control_ops;
 
+struct sockaddr_in;
+
+/* Room for "a.b.c.d:port". */
+#define WSG_ADDR_LEN 24
+/* "a.b.c.d:port" of an IPv4 address. */
+void wsg_transport_format_addr(char *buf, size_t len,
+                               const struct sockaddr_in *sa);
+/* A non-blocking TCP socket listening on ep (SO_REUSEADDR: a restarted
+ * emulator must not wait out TIME_WAIT); local gets the address it listens
+ * on, the port the kernel picked for port 0. Returns the descriptor, or
+ * -errno with the reason, naming proto and the address, in err. */
+int wsg_transport_listen_tcp(const struct wsg_endpoint *ep, int backlog,
+                             const char *proto, char *local, size_t locallen,
+                             char *err, size_t errlen);
+
 /* The message for a socket that cannot listen on ADDR:PORT: the reason,
  * the step that failed when it is not the bind (step NULL), and for a port
  * below 1024 refused with EACCES, what to do about it. err is -errno. */
