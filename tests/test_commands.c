@@ -257,7 +257,11 @@ static void test_stop_and_fast_stop(void)
              WSG_E_CMD_FORMAT_ERROR);
     tdev_steps(&t, 1);
     CHECK(tdev_flags(&t) & WSG_SF_FAST_STOP);
-    acknowledge(&t);
+    /* Right after "ack", before a step: the flags agree with its
+     * E_SUCCESS. */
+    CHECK_EQ(tdev_cmd(&t, WSG_CMD_ACK_FAST_STOP, ack_key, 3), WSG_E_SUCCESS);
+    CHECK(!(tdev_flags(&t) & WSG_SF_FAST_STOP));
+    tdev_steps(&t, 1);
     CHECK(!(tdev_flags(&t) & WSG_SF_FAST_STOP));
     CHECK_EQ(tdev_grasp_state(&t), WSG_GS_IDLE);
     /* "ack" with nothing to acknowledge: E_SUCCESS */
@@ -274,7 +278,7 @@ static void test_stop_and_fast_stop(void)
 static void test_grasp_release(void)
 {
     struct tdev t;
-    uint8_t p[8] = {0};
+    uint8_t p[9] = {0}; /* up to 9 bytes are sent below */
 
     tdev_init(&t);
     CHECK_EQ(tdev_cmd2f(&t, WSG_CMD_GRASP, 40.0f, 50.0f),
@@ -459,7 +463,7 @@ static void test_state_queries(void)
 static void test_grasp_stats(void)
 {
     struct tdev t;
-    uint8_t b;
+    uint8_t b[2] = {0, 0}; /* up to 2 bytes are sent below */
 
     tdev_init(&t);
     CHECK_EQ(tdev_home(&t, 0), WSG_E_SUCCESS);
@@ -470,17 +474,17 @@ static void test_grasp_stats(void)
     CHECK_EQ(wsg_get_u32(tdev_last(&t)->params), 1);
     CHECK_EQ(wsg_get_u16(tdev_last(&t)->params + 4), 1);
     CHECK_EQ(wsg_get_u16(tdev_last(&t)->params + 6), 0);
-    b = 2;
-    CHECK_EQ(tdev_cmd(&t, WSG_CMD_GET_GRASP_STATS, &b, 1),
+    b[0] = 2;
+    CHECK_EQ(tdev_cmd(&t, WSG_CMD_GET_GRASP_STATS, b, 1),
              WSG_E_INVALID_PARAMETER);
-    CHECK_EQ(tdev_cmd(&t, WSG_CMD_GET_GRASP_STATS, &b, 2),
+    CHECK_EQ(tdev_cmd(&t, WSG_CMD_GET_GRASP_STATS, b, 2),
              WSG_E_CMD_FORMAT_ERROR);
     /* D0: reset after reading */
-    b = 1;
-    CHECK_EQ(tdev_cmd(&t, WSG_CMD_GET_GRASP_STATS, &b, 1), WSG_E_SUCCESS);
+    b[0] = 1;
+    CHECK_EQ(tdev_cmd(&t, WSG_CMD_GET_GRASP_STATS, b, 1), WSG_E_SUCCESS);
     CHECK_EQ(wsg_get_u32(tdev_last(&t)->params), 1);
-    b = 0;
-    CHECK_EQ(tdev_cmd(&t, WSG_CMD_GET_GRASP_STATS, &b, 1), WSG_E_SUCCESS);
+    b[0] = 0;
+    CHECK_EQ(tdev_cmd(&t, WSG_CMD_GET_GRASP_STATS, b, 1), WSG_E_SUCCESS);
     CHECK_EQ(wsg_get_u32(tdev_last(&t)->params), 0);
 }
 

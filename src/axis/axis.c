@@ -216,8 +216,13 @@ static int wsg_axis_next_block(const struct wsg_axis *ax, double dir, double f,
     double c[2];
     int n = 0, i, found = 0;
 
-    if (dir < 0 && ax->part)
-        c[n++] = wsg_axis_rep(ax, ax->part_width) - f / ax->part_stiffness;
+    if (dir < 0 && ax->part) {
+        double p = wsg_axis_rep(ax, ax->part_width) - f / ax->part_stiffness;
+        /* Fingers that already squeeze the part harder than f (left there
+         * by a block under a higher force limit) are blocked where they
+         * are, not let through the part. */
+        c[n++] = p > ax->width ? ax->width : p;
+    }
     if (ax->obstacle)
         c[n++] = wsg_axis_rep(ax, ax->obstacle_width);
     for (i = 0; i < n; i++) {
@@ -249,6 +254,10 @@ static int wsg_axis_block_at(const struct wsg_axis *ax, double dir, double f,
 
     if (dir < 0 && ax->part) {
         double p = wsg_axis_rep(ax, ax->part_width) - f / ax->part_stiffness;
+        /* A part narrower than its own squeeze (made so while held) lets
+         * the fingers close only as far as the end stop. */
+        if (p < wsg_axis_end_stop(ax, -1.0))
+            p = wsg_axis_end_stop(ax, -1.0);
         if (ax->width >= p - WSG_AXIS_EPS)
             c[n++] = p;
     }
@@ -650,7 +659,10 @@ uint32_t wsg_axis_flags(const struct wsg_axis *ax)
     if (ax->cfg.force_sensor && (ax->grasp_state == WSG_GS_GRASPING ||
                                  ax->grasp_state == WSG_GS_HOLDING))
         f |= WSG_SF_FORCECNTL_MODE;
-    if (ax->fast_stop)
+    /* As the commands see it: an acknowledge or a FAST STOP answered but
+     * not yet stepped already counts, so a 40h right after "ack" agrees
+     * with the E_SUCCESS that "ack" got. */
+    if (wsg_axis_fast_stopped(ax))
         f |= WSG_SF_FAST_STOP;
     return f;
 }
@@ -663,6 +675,11 @@ int wsg_axis_fast_stopped(const struct wsg_axis *ax)
 int wsg_axis_busy(const struct wsg_axis *ax)
 {
     if (ax->req_motion.kind != WSG_MOTION_NONE)
+        return 1;
+    /* A request cancelled before it started owes its E_CMD_ABORTED at the
+     * next step, and there is one slot for it: a second request now could
+     * be cancelled too and overwrite it, losing a final result. */
+    if (ax->req_cancelled.kind != WSG_MOTION_NONE)
         return 1;
     if (ax->req_stop || ax->req_fast_stop)
         return 0;
