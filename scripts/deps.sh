@@ -5,6 +5,8 @@
 set -eu
 
 pkgs="cmake make gcc libc6-dev"
+# The memcheck test (tests/memcheck.sh) runs the daemon under valgrind.
+pkgs="$pkgs valgrind"
 # The CAN tests (tests/can/run.sh): where the host kernel has no vcan, QEMU
 # boots Debian's kernel with it; xz unpacks that kernel, iproute2's ip and
 # tc make the buses. The kernel and busybox themselves are only downloaded,

@@ -98,17 +98,29 @@ static void set_cloexec(int fd)
 }
 
 /* Fork and exec exe with args; the child's stdout (and stderr, if err_fd is
- * not NULL) go to fresh pipes. stdin is /dev/null. */
+ * not NULL) go to fresh pipes. stdin is /dev/null. If WSG_TEST_WRAPPER is
+ * set (e.g. "valgrind --error-exitcode=99 -q"), it is split on blanks and
+ * the program runs under it: `WRAPPER... exe args...`, the wrapper looked up
+ * in PATH. */
 static pid_t spawn(const char *exe, const char *const *args, int *out_fd,
                    int *err_fd)
 {
     int po[2], pe[2] = {-1, -1};
     char *argv[64];
+    static char wrapper[512];
+    const char *w = getenv("WSG_TEST_WRAPPER");
     int n = 0;
 
+    if (w && *w) {
+        snprintf(wrapper, sizeof wrapper, "%s", w);
+        for (char *tok = strtok(wrapper, " \t"); tok && n < 32;
+             tok = strtok(NULL, " \t"))
+            argv[n++] = tok;
+    }
+    int first = n;
     argv[n++] = (char *)exe;
-    for (; args && args[n - 1] && n < 63; n++)
-        argv[n] = (char *)args[n - 1];
+    for (int i = 0; args && args[i] && n < 63; i++)
+        argv[n++] = (char *)args[i];
     argv[n] = NULL;
 
     if (pipe(po) != 0)
@@ -150,8 +162,11 @@ static pid_t spawn(const char *exe, const char *const *args, int *out_fd,
             close(pe[1]);
         }
         signal(SIGPIPE, SIG_DFL);
-        execv(exe, argv);
-        fprintf(stderr, "emu: exec %s: %s\n", exe, strerror(errno));
+        if (first > 0)
+            execvp(argv[0], argv);
+        else
+            execv(exe, argv);
+        fprintf(stderr, "emu: exec %s: %s\n", argv[0], strerror(errno));
         _exit(127);
     }
     child_add(pid);

@@ -1,0 +1,65 @@
+#!/bin/bash
+# test.sh: build wsgemu twice and run every test in both builds:
+#   build       the normal build (RelWithDebInfo), all of ctest, including
+#               `memcheck` (the daemon under valgrind over the integration
+#               tests that hold under it, tests/memcheck.sh);
+#   build-asan  -DWSG_SANITIZE=ON: everything built with AddressSanitizer and
+#               UndefinedBehaviorSanitizer, all of ctest again (memcheck is
+#               not registered there: valgrind cannot run ASan programs).
+#               Any sanitizer finding, in a test or in the daemon a test
+#               started, aborts that program, and the test fails.
+# Both runs always happen; the summary at the end says which failed, and the
+# exit status is non-zero if either did. Run scripts/deps.sh first.
+# Usage: scripts/test.sh [CTEST_ARGS...]   (passed to both ctest runs, e.g.
+#   -R integ_basic or -LE can)
+set -eu
+cd "$(dirname "$0")/.."
+
+jobs=$(nproc 2>/dev/null || echo 2)
+results=()
+failed=0
+
+# run NAME DIR [CMAKE_ARGS...]: configure, build and test one build tree.
+run() {
+    local name=$1 dir=$2 st=0 t0 t1
+    shift 2
+    echo "=== test.sh: $name: configure and build $dir"
+    t0=$(date +%s)
+    if cmake -B "$dir" "$@" && cmake --build "$dir" --parallel "$jobs"; then
+        echo "=== test.sh: $name: ctest in $dir"
+        ctest --test-dir "$dir" --output-on-failure "${ctest_args[@]}" || st=$?
+        [ "$st" = 0 ] || st="ctest failed (status $st)"
+    else
+        st="build failed"
+    fi
+    t1=$(date +%s)
+    if [ "$st" = 0 ]; then
+        results+=("$name ($dir): passed, $((t1 - t0)) s")
+    else
+        results+=("$name ($dir): FAILED: $st, $((t1 - t0)) s")
+        failed=1
+    fi
+}
+
+ctest_args=("$@")
+
+run normal build -DWSG_SANITIZE=OFF
+
+# Findings are fatal and say where: ASan aborts (abort_on_error), leaks
+# are reported at exit (LeakSanitizer), UBSan stops at the first error with
+# a stack trace. The daemon inherits this from the test that starts it; a
+# daemon that aborts shows in its exit status, which the tests check.
+export ASAN_OPTIONS=detect_leaks=1:abort_on_error=1
+export UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1
+run sanitizers build-asan -DWSG_SANITIZE=ON
+
+echo "=== test.sh: summary"
+for r in "${results[@]}"; do
+    echo "  $r"
+done
+if [ "$failed" = 0 ]; then
+    echo "test.sh: all passed"
+else
+    echo "test.sh: FAILED"
+fi
+exit "$failed"
