@@ -43,12 +43,14 @@ enum {
     OPT_TIME_SCALE,
     OPT_CONTROL,
     OPT_LOG,
-    OPT_CONFIG
+    OPT_CONFIG,
+    OPT_MAX_CLIENTS
 };
 
 /* The config file's keys are these names too (without the dashes). */
 static const struct option long_options[] = {
     {"tcp", required_argument, NULL, OPT_TCP},
+    {"max-clients", required_argument, NULL, OPT_MAX_CLIENTS},
     {"udp", required_argument, NULL, OPT_UDP},
     {"pty", required_argument, NULL, OPT_PTY},
     {"can", required_argument, NULL, OPT_CAN},
@@ -94,6 +96,9 @@ static void usage(FILE *f)
         "  --can IFACE[:ID]           SocketCAN interface; commands on\n"
         "                             the 11-bit ID (default 0x000),\n"
         "                             answers on ID+1\n"
+        "  --max-clients N            TCP connections served at once\n"
+        "                             (1..%u, default %u); a further one\n"
+        "                             is accepted and closed at once\n"
         "  --control [ADDR:]PORT      control channel (TCP, default\n"
         "                             address 127.0.0.1)\n"
         "\n"
@@ -149,10 +154,11 @@ static void usage(FILE *f)
         "\n"
         "When every interface is open, one line is printed on stdout:\n"
         "  ready tcp=ADDR:PORT udp=ADDR:PORT>REMOTE pty=PATH can=IFACE:ID\n"
-            "        control=ADDR:PORT\n"
+        "        control=ADDR:PORT\n"
         "(the fields of the open interfaces only).\n"
         "SIGINT or SIGTERM stops the emulator with exit status 0.\n",
-        WSG_STEP_US_MIN, WSG_STEP_US_MAX, WSG_STEP_US_DEFAULT);
+        WSG_MAX_CLIENTS_MAX, WSG_MAX_CLIENTS_DEFAULT, WSG_STEP_US_MIN,
+        WSG_STEP_US_MAX, WSG_STEP_US_DEFAULT);
 }
 
 /* Decimal digits only: strtoul would also take signs, spaces and hex. */
@@ -411,6 +417,14 @@ static int set_option(struct wsg_options *o, int id, const char *val,
         }
         break;
     }
+    case OPT_MAX_CLIENTS:
+        if (parse_uint(val, WSG_MAX_CLIENTS_MAX, &v) < 0 || v < 1) {
+            snprintf(err, errcap, "'%s' is not a number in 1..%u", val,
+                     WSG_MAX_CLIENTS_MAX);
+            return -1;
+        }
+        o->max_clients = (unsigned)v;
+        break;
     case OPT_STEP_US:
         if (parse_uint(val, WSG_STEP_US_MAX, &v) < 0 || v < WSG_STEP_US_MIN) {
             snprintf(err, errcap,
@@ -540,6 +554,7 @@ void wsg_options_defaults(struct wsg_options *o)
     o->tcp.addr[0] = 127;
     o->tcp.addr[3] = 1;
     o->tcp.port = WSG_TCP_PORT_DEFAULT;
+    o->max_clients = WSG_MAX_CLIENTS_DEFAULT;
     o->udp.addr[0] = 127;
     o->udp.addr[3] = 1;
     o->udp.port = WSG_UDP_PORT_DEFAULT;

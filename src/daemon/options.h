@@ -24,6 +24,12 @@
 /* Room for the strings a config file gives (paths, names, the tag): they
  * must outlive the file's line buffer, and options hold no heap memory. */
 #define WSG_OPTIONS_STRBUF 2048u
+/* TCP connections served at once (--max-clients). A real gripper serves a
+ * handful; 64 leaves room for test rigs that open one per process while a
+ * connection-storm or a port scan still finds a limit. The ceiling is the
+ * number of connection slots the TCP transport has. */
+#define WSG_MAX_CLIENTS_DEFAULT 64u
+#define WSG_MAX_CLIENTS_MAX     256u
 
 /* An IPv4 endpoint as given on the command line. */
 struct wsg_endpoint {
@@ -36,6 +42,7 @@ struct wsg_options {
      * their defaults, like a gripper fresh from the factory. */
     int tcp_enabled;
     struct wsg_endpoint tcp;
+    unsigned max_clients; /* TCP connections at once; more are refused */
     int udp_enabled;
     struct wsg_endpoint udp;     /* where the emulator listens */
     uint16_t udp_remote_port;    /* where replies go, at the sender's IP */

@@ -9,6 +9,16 @@
  * EPOLLOUT; a client that lets its queue grow past WSG_OUTQ_MAX (64 KiB) is
  * dropped rather than slowing anyone else down. Nothing ever blocks.
  *
+ * That bound is only real if the kernel's side is bounded too: with send
+ * buffer autotuning a socket of a client that never reads absorbs megabytes
+ * (up to tcp_wmem's maximum) before the queue sees a byte, so every accepted
+ * socket gets a fixed SO_SNDBUF. Output held for one connection is then at
+ * most the kernel's buffer plus the queue.
+ *
+ * At most --max-clients connections are served; a further one is accepted
+ * and closed at once (the client sees the end of the stream instead of
+ * hanging in the backlog), and the refusal is logged once per burst.
+ *
  * A connection that ends (EOF, error, dropped) is only marked during the
  * event batch, because the device may be in the middle of a call that sends
  * to it and later events of the batch may name it; settle then reports it to
@@ -43,6 +53,8 @@
 #define WSG_TCP_READS_PER_EVENT   16
 #define WSG_TCP_ACCEPTS_PER_EVENT 16
 #define WSG_TCP_BACKLOG           64
+/* Per accepted socket. Linux doubles it for its bookkeeping. */
+#define WSG_TCP_SNDBUF 65536
 
 struct wsg_tcp;
 
@@ -51,6 +63,8 @@ struct wsg_tcp_conn {
     struct wsg_tcp *tcp;
     unsigned slot;
     int dead;
+    /* Dropped for not reading: closed with a reset (see conn_free). */
+    int reset;
     uint32_t events; /* as registered with epoll */
     char peer[WSG_ADDR_LEN];
     struct wsg_parser parser;
@@ -69,6 +83,10 @@ struct wsg_tcp {
      * connection can be taken and closed instead of waking us forever. */
     int spare_fd;
     uint32_t next_gen;
+    unsigned max_clients;
+    /* Refused since the last time a connection ended: only the first of a
+     * burst is logged, so a connection storm cannot flood stderr. */
+    unsigned refused;
     unsigned nconns;
     unsigned ndead;
     char local[WSG_ADDR_LEN];
@@ -114,9 +132,10 @@ static void conn_send_failed(struct wsg_tcp_conn *c, int err)
  * queue overflows is dropped rather than slowing anyone else down. */
 static void conn_sent(struct wsg_tcp_conn *c, int r)
 {
-    if (r == -ENOBUFS)
+    if (r == -ENOBUFS) {
+        c->reset = 1;
         conn_kill(c, "output queue over 64 KiB (client not reading)");
-    else if (r < 0)
+    } else if (r < 0)
         conn_send_failed(c, -r);
     else if (r)
         conn_set_events(c, c->events | EPOLLOUT);
@@ -174,9 +193,19 @@ static void conn_read(struct wsg_tcp_conn *c)
 static void conn_free(struct wsg_tcp *tcp, struct wsg_tcp_conn *c)
 {
     wsg_loop_watch_del(tcp->loop, &c->watch);
+    if (c->reset) {
+        /* A plain close would queue the FIN behind the output the client
+         * does not read: it would never learn that it was dropped, and
+         * the kernel would keep that output for an orphaned socket until
+         * its retries run out. Linger 0 resets at once and frees it. */
+        struct linger lg = {1, 0};
+
+        setsockopt(c->watch.fd, SOL_SOCKET, SO_LINGER, &lg, sizeof lg);
+    }
     close(c->watch.fd);
     tcp->slots[c->slot] = NULL;
     tcp->nconns--;
+    tcp->refused = 0; /* room again: the next refusal starts a burst */
     if (c->dead)
         tcp->ndead--;
     free(c);
@@ -233,16 +262,22 @@ static void conn_accept(struct wsg_tcp *tcp, int fd,
     struct wsg_tcp_conn *c;
     char name[WSG_ADDR_LEN];
     int one = 1;
+    int sndbuf = WSG_TCP_SNDBUF;
     int slot;
     int r;
 
     wsg_transport_format_addr(name, sizeof name, peer);
-    slot = free_slot(tcp);
+    slot = tcp->nconns < tcp->max_clients ? free_slot(tcp) : -1;
     if (slot < 0) {
         /* Accepted only to be closed at once: the client sees a clean
-         * refusal instead of hanging in the backlog. */
-        fprintf(stderr, "wsgemu: tcp %s: refused: %u connections open\n", name,
-                WSG_TCP_CONN_MAX);
+         * refusal instead of hanging in the backlog. Dead connections
+         * still count: their slots are freed at the end of the batch. */
+        if (tcp->refused++ == 0)
+            fprintf(stderr,
+                    "wsgemu: tcp %s: refused: %u connections open "
+                    "(--max-clients); further refusals are not logged "
+                    "until one ends\n",
+                    name, tcp->nconns);
         close(fd);
         return;
     }
@@ -259,6 +294,9 @@ static void conn_accept(struct wsg_tcp *tcp, int fd,
     /* Small replies must leave at once, not wait for Nagle. */
     if (setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one) < 0)
         fprintf(stderr, "wsgemu: tcp %s: TCP_NODELAY: %s\n", name,
+                strerror(errno));
+    if (setsockopt(fd, SOL_SOCKET, SO_SNDBUF, &sndbuf, sizeof sndbuf) < 0)
+        fprintf(stderr, "wsgemu: tcp %s: SO_SNDBUF: %s\n", name,
                 strerror(errno));
     c->watch.owner = tcp->t;
     c->watch.fd = fd;
@@ -429,6 +467,9 @@ static int tcp_open(struct wsg_transport *t,
     tcp->dev = env->dev;
     tcp->tag_base = t->tag_base;
     tcp->check_crc = env->opt->check_crc;
+    tcp->max_clients = env->opt->max_clients;
+    if (tcp->max_clients == 0 || tcp->max_clients > WSG_TCP_CONN_MAX)
+        tcp->max_clients = WSG_TCP_CONN_MAX;
     tcp->watch.owner = t;
     tcp->spare_fd = open("/dev/null", O_RDONLY | O_CLOEXEC);
     r = wsg_transport_listen_tcp(&env->opt->tcp, WSG_TCP_BACKLOG, "tcp",
