@@ -538,6 +538,25 @@ static void test_reset(void)
     CHECK_EQ(t.sess[0].n, 3); /* nothing more came */
 }
 
+/* A part placed wider than the opening squeezes with the force limit at
+ * most, whatever its stiffness says. */
+static void test_part_wider_than_opening(void)
+{
+    struct tdev t;
+    int i;
+
+    tdev_init(&t);
+    CHECK_EQ(tdev_home(&t, 0), WSG_E_SUCCESS);
+    CHECK_EQ(tdev_move(&t, 0, 50.0f, 100.0f), WSG_E_CMD_PENDING);
+    CHECK_EQ(tdev_final(&t, WSG_CMD_PREPOSITION, 4000), WSG_E_SUCCESS);
+    wsg_axis_set_part(&t.dev.axis, 70.0, 0);
+    CHECK_EQ(tdev_move(&t, 0, 90.0f, 20.0f), WSG_E_CMD_PENDING);
+    for (i = 0; i < 3000; i++) {
+        tdev_steps(&t, 1);
+        CHECK(t.dev.axis.force <= t.dev.axis.force_limit);
+    }
+}
+
 int main(void)
 {
     test_durations();
@@ -554,5 +573,6 @@ int main(void)
     test_fault_consequences();
     test_overheating();
     test_reset();
+    test_part_wider_than_opening();
     TEST_EXIT();
 }

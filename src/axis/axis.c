@@ -274,14 +274,17 @@ static int wsg_axis_block_at(const struct wsg_axis *ax, double dir, double f,
     return found;
 }
 
-/* The contact force at width x while closing. */
+/* The contact force at width x while closing. A part placed wider than
+ * the opening (the control channel can do that) would squeeze beyond
+ * anything: the drive holds it with its force limit at most. */
 static double wsg_axis_contact_force(const struct wsg_axis *ax, double x)
 {
-    double p = wsg_axis_rep(ax, ax->part_width);
+    double p = wsg_axis_rep(ax, ax->part_width), f;
 
-    if (ax->part && x < p)
-        return ax->part_stiffness * (p - x);
-    return 0.0;
+    if (!ax->part || x >= p)
+        return 0.0;
+    f = ax->part_stiffness * (p - x);
+    return f < ax->force_limit ? f : ax->force_limit;
 }
 
 static void wsg_axis_start(struct wsg_axis *ax, const struct wsg_motion *m)
