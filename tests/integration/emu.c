@@ -944,3 +944,49 @@ int emu_proc_activity(pid_t pid, long *switches, long *ticks)
     *ticks = (long)(ut + st);
     return 0;
 }
+
+int emu_start_multi(struct emu *e, const char *exe,
+                    const struct emu_transport *const *tps, size_t ntp,
+                    const char *const *extra)
+{
+    /* The hooks' argument strings live here until the daemon has them. */
+    static struct emu parts[8];
+    const char *args[48];
+    size_t n = 0, i;
+    int k, r;
+
+    if (ntp > sizeof parts / sizeof parts[0])
+        return -1;
+    for (i = 0; i < ntp; i++) {
+        memset(&parts[i], 0, sizeof parts[i]);
+        parts[i].tp_fd = -1;
+        if (tps[i]->daemon_args) {
+            r = tps[i]->daemon_args(&parts[i]);
+            if (r == 77) {
+                printf("SKIP: %s cannot run here\n", tps[i]->field);
+                exit(77);
+            }
+            if (r != 0)
+                return -1;
+            for (k = 0; parts[i].tp_argv[k] && n < 32; k++)
+                args[n++] = parts[i].tp_argv[k];
+        } else {
+            snprintf(parts[i].tp_arg[0], sizeof parts[i].tp_arg[0], "--%s",
+                     tps[i]->field);
+            args[n++] = parts[i].tp_arg[0];
+            args[n++] = "127.0.0.1:0";
+        }
+    }
+    for (k = 0; extra && extra[k] && n < 47; k++)
+        args[n++] = extra[k];
+    args[n] = NULL;
+    if (emu_start(e, exe, args) != 0)
+        return -1;
+    /* What a hook reserved for its clients (UDP's reply port). */
+    for (i = 0; i < ntp; i++)
+        if (parts[i].tp_fd >= 0) {
+            e->tp_fd = parts[i].tp_fd;
+            e->tp_port = parts[i].tp_port;
+        }
+    return 0;
+}

@@ -59,6 +59,11 @@ int emu_start(struct emu *e, const char *exe, const char *const *args);
  * (NULL-terminated, may be NULL). Exits 77 when tp cannot run here. */
 int emu_start_tp(struct emu *e, const char *exe,
                  const struct emu_transport *tp, const char *const *extra);
+/* Start with several interfaces at once (each transport's daemon_args,
+ * then extra); exits 77 when one cannot run here. */
+int emu_start_multi(struct emu *e, const char *exe,
+                    const struct emu_transport *const *tps, size_t ntp,
+                    const char *const *extra);
 /* The transport named by argv[2] ("tcp" when absent); exits 2 for an
  * unknown name. */
 const struct emu_transport *emu_transport_arg(int argc, char **argv);

@@ -155,42 +155,16 @@ int main(int argc, char **argv)
 {
     const char *exe = emu_exe(argc, argv);
     const struct emu_transport *tps[3] = {&emu_tcp, &emu_udp, &emu_pty};
-    const char *args[16];
     static struct client ks[NCLIENTS];
-    static struct emu parts[3];
+    static const char *const extra[] = {"--acceleration", "5000", NULL};
     struct emu e;
     struct emu_frame f;
-    size_t n = 0;
     int imm = 0;
 
     setvbuf(stdout, NULL, _IOLBF, 0);
-    /* Every interface's options (as integ_together collects them). */
-    for (int i = 0; i < 3; i++) {
-        memset(&parts[i], 0, sizeof parts[i]);
-        parts[i].tp_fd = -1;
-        if (tps[i]->daemon_args) {
-            int r = tps[i]->daemon_args(&parts[i]);
-            if (r == 77)
-                test_skip("an interface cannot run here");
-            REQUIRE(r == 0);
-            for (int j = 0; parts[i].tp_argv[j]; j++)
-                args[n++] = parts[i].tp_argv[j];
-        } else {
-            args[n++] = "--tcp";
-            args[n++] = "127.0.0.1:0";
-        }
-    }
     /* Short moves: more of them succeed in the run, and more finals
      * interleave with the answers. */
-    args[n++] = "--acceleration";
-    args[n++] = "5000";
-    args[n] = NULL;
-    REQUIRE(emu_start(&e, exe, args) == 0);
-    for (int i = 0; i < 3; i++)
-        if (parts[i].tp_fd >= 0) {
-            e.tp_fd = parts[i].tp_fd;
-            e.tp_port = parts[i].tp_port;
-        }
+    REQUIRE(emu_start_multi(&e, exe, tps, 3, extra) == 0);
     printf("%s\n", e.line);
 
     static const char *const names[NCLIENTS] = {"tcp 1", "tcp 2", "tcp 3",

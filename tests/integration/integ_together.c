@@ -20,44 +20,13 @@ int main(int argc, char **argv)
 {
     const char *exe = emu_exe(argc, argv);
     const struct emu_transport *tps[N] = {&emu_tcp, &emu_udp, &emu_pty};
-    const char *args[16];
     struct emu e;
     struct emu_client c[N];
     struct emu_frame f;
     char v[128];
-    size_t n = 0;
-    int i, j, k;
+    int i, j;
 
-    /* The options of every transport: each one's daemon_args hook puts
-     * them into e.tp_argv, so collect them one after the other. */
-    memset(&e, 0, sizeof e);
-    e.tp_fd = -1;
-    {
-        static struct emu parts[N];
-        for (i = 0; i < N; i++) {
-            memset(&parts[i], 0, sizeof parts[i]);
-            parts[i].tp_fd = -1;
-            if (tps[i]->daemon_args) {
-                int r = tps[i]->daemon_args(&parts[i]);
-                if (r == 77)
-                    test_skip("an interface cannot run here");
-                REQUIRE(r == 0);
-                for (k = 0; parts[i].tp_argv[k]; k++)
-                    args[n++] = parts[i].tp_argv[k];
-            } else {
-                args[n++] = "--tcp";
-                args[n++] = "127.0.0.1:0";
-            }
-        }
-        args[n] = NULL;
-        REQUIRE(emu_start(&e, exe, args) == 0);
-        /* What the hooks reserved for their clients (UDP's reply port). */
-        for (i = 0; i < N; i++)
-            if (parts[i].tp_fd >= 0) {
-                e.tp_fd = parts[i].tp_fd;
-                e.tp_port = parts[i].tp_port;
-            }
-    }
+    REQUIRE(emu_start_multi(&e, exe, tps, N, NULL) == 0);
     printf("%s\n", e.line);
     /* tcp=, udp=, pty= in this order, each once. */
     {
