@@ -160,20 +160,30 @@ int main(int argc, char **argv)
     struct emu e;
     struct emu_frame f;
     int imm = 0;
+    /* "can" (the CAN runner's argument): the same run over the one peer a
+     * bus has; otherwise TCP, UDP and the pty at once. */
+    int over_can = argc > 2 && strcmp(argv[2], "can") == 0;
+    int nclients = over_can ? 1 : NCLIENTS;
 
     setvbuf(stdout, NULL, _IOLBF, 0);
     /* Short moves: more of them succeed in the run, and more finals
      * interleave with the answers. */
-    REQUIRE(emu_start_multi(&e, exe, tps, 3, extra) == 0);
-    printf("%s\n", e.line);
-
-    static const char *const names[NCLIENTS] = {"tcp 1", "tcp 2", "tcp 3",
-                                                "udp", "pty"};
-    for (int i = 0; i < NCLIENTS; i++) {
-        ks[i].name = names[i];
-        ks[i].idx = (unsigned)i;
-        REQUIRE(emu_open(&ks[i].c, &e, i < 3 ? &emu_tcp : tps[i - 2]) == 0);
+    if (over_can) {
+        REQUIRE(emu_start_tp(&e, exe, &emu_can, extra) == 0);
+        ks[0].name = "can";
+        REQUIRE(emu_open(&ks[0].c, &e, &emu_can) == 0);
+    } else {
+        static const char *const names[NCLIENTS] = {"tcp 1", "tcp 2", "tcp 3",
+                                                    "udp", "pty"};
+        REQUIRE(emu_start_multi(&e, exe, tps, 3, extra) == 0);
+        for (int i = 0; i < NCLIENTS; i++) {
+            ks[i].name = names[i];
+            ks[i].idx = (unsigned)i;
+            REQUIRE(emu_open(&ks[i].c, &e, i < 3 ? &emu_tcp : tps[i - 2]) ==
+                    0);
+        }
     }
+    printf("%s\n", e.line);
     /* Prepositions need a referenced gripper. */
     CHECK_EQ(emu_motion(&ks[0].c, WSG_CMD_HOMING, "\0", 1, HOMING_MS, &imm),
              WSG_E_SUCCESS);
@@ -184,7 +194,7 @@ int main(int argc, char **argv)
         struct pollfd pfd[NCLIENTS];
         int all = 1;
 
-        for (int i = 0; i < NCLIENTS; i++) {
+        for (int i = 0; i < nclients; i++) {
             send_more(&ks[i]);
             while (emu_recv(&ks[i].c, &f, 0) == 1)
                 take(&ks[i], &f);
@@ -195,11 +205,11 @@ int main(int argc, char **argv)
         }
         if (all || emu_now_ms() - t0 > RUN_MS)
             break;
-        poll(pfd, NCLIENTS, 1);
+        poll(pfd, (nfds_t)nclients, 1);
     }
     printf("run: %.0f ms\n", emu_now_ms() - t0);
     unsigned finals = 0;
-    for (int i = 0; i < NCLIENTS; i++) {
+    for (int i = 0; i < nclients; i++) {
         struct client *k = &ks[i];
 
         /* Nothing after the last answer: no duplicate, no stray final. */
@@ -214,7 +224,7 @@ int main(int argc, char **argv)
         CHECK_EQ(k->pending, 0);
         CHECK_EQ(k->c.bad, 0);
         finals += k->finals;
-        if (i < 3)
+        if (k->c.tp->connection)
             CHECK_EQ(emu_request(&k->c, WSG_CMD_DISCONNECT, NULL, 0, NULL,
                                  EMU_REPLY_MS),
                      WSG_E_SUCCESS);
