@@ -428,15 +428,22 @@ static void wsg_axis_arrived(struct wsg_axis *ax)
     }
 }
 
-/* Stop the fastest way, motor off; only an acknowledge clears it. */
-static void wsg_axis_fast_stop(struct wsg_axis *ax)
+/* End the running motion where the fingers are, motor off, and give its
+ * owner the final result. */
+static void wsg_axis_abort(struct wsg_axis *ax, uint16_t status)
 {
     struct wsg_motion m = ax->motion;
 
     wsg_axis_halt(ax);
+    wsg_axis_done(ax, &m, status);
+}
+
+/* Stop the fastest way, motor off; only an acknowledge clears it. */
+static void wsg_axis_fast_stop(struct wsg_axis *ax)
+{
     ax->fast_stop = 1;
     ax->grasp_state = WSG_GS_ERROR;
-    wsg_axis_done(ax, &m, WSG_E_CMD_ABORTED);
+    wsg_axis_abort(ax, WSG_E_CMD_ABORTED);
 }
 
 static void wsg_axis_apply_requests(struct wsg_axis *ax)
@@ -457,13 +464,11 @@ static void wsg_axis_apply_requests(struct wsg_axis *ax)
         }
     }
     if (ax->req_stop) {
-        struct wsg_motion m = ax->motion;
         ax->req_stop = 0;
-        wsg_axis_halt(ax);
         ax->event_flags |= WSG_SF_AXIS_STOPPED;
         if (ax->grasp_state != WSG_GS_ERROR)
             ax->grasp_state = WSG_GS_IDLE;
-        wsg_axis_done(ax, &m, WSG_E_CMD_ABORTED);
+        wsg_axis_abort(ax, WSG_E_CMD_ABORTED);
     }
     if (ax->req_motion.kind != WSG_MOTION_NONE) {
         struct wsg_motion m = ax->req_motion;
@@ -487,14 +492,10 @@ static int wsg_axis_soft_limit_hit(struct wsg_axis *ax, double x, double v)
         limit = ax->soft_plus;
     else
         return 0;
-    {
-        struct wsg_motion m = ax->motion;
-        wsg_axis_halt(ax);
-        ax->width = limit;
-        ax->fast_stop = 1;
-        ax->grasp_state = WSG_GS_ERROR;
-        wsg_axis_done(ax, &m, WSG_E_RANGE_ERROR);
-    }
+    ax->width = limit;
+    ax->fast_stop = 1;
+    ax->grasp_state = WSG_GS_ERROR;
+    wsg_axis_abort(ax, WSG_E_RANGE_ERROR);
     return 1;
 }
 
@@ -577,10 +578,8 @@ static void wsg_axis_apply_faults(struct wsg_axis *ax)
     if (fresh & (WSG_SF_POWER_FAULT | WSG_SF_CURR_FAULT)) {
         wsg_axis_fast_stop(ax);
     } else if (fresh & WSG_SF_TEMP_FAULT) {
-        struct wsg_motion m = ax->motion;
-        wsg_axis_halt(ax);
         ax->grasp_state = WSG_GS_ERROR;
-        wsg_axis_done(ax, &m, WSG_E_CMD_ABORTED);
+        wsg_axis_abort(ax, WSG_E_CMD_ABORTED);
     }
 }
 
