@@ -54,6 +54,10 @@ struct wsg_session {
     void *ctx; /* the transport's */
     unsigned nstreams;
     struct wsg_stream streams[WSG_STREAM_COUNT];
+    /* On the device's list of streaming sessions while nstreams > 0, so
+     * polling costs what is subscribed, not what is connected. */
+    struct wsg_session *stream_next;
+    struct wsg_session **stream_pprev; /* NULL: not on the list */
 };
 
 struct wsg_device_info {
@@ -81,10 +85,12 @@ struct wsg_device {
     /* Resolve a session tag for a final result; NULL when it is gone. */
     struct wsg_session *(*lookup)(void *ctx, uint32_t tag);
     void *lookup_ctx;
+    struct wsg_session *streaming; /* sessions with nstreams > 0 */
 };
 
 void wsg_device_init(struct wsg_device *d, const struct wsg_axis_config *cfg);
-/* Power cycle: session settings back to defaults, not referenced. */
+/* Power cycle: session settings back to defaults, not referenced, no
+ * session streams. */
 void wsg_device_reset(struct wsg_device *d);
 
 void wsg_session_init(struct wsg_session *s, uint32_t tag, unsigned flags,
@@ -110,9 +116,15 @@ void wsg_device_dispatch(struct wsg_device *d, struct wsg_session *s,
 void wsg_device_step(struct wsg_device *d);
 /* Send the stream packets of s that are due at the device's time. */
 void wsg_device_poll_streams(struct wsg_device *d, struct wsg_session *s);
-/* Nothing for steps to do: model idle. Streams are the caller's to count
- * (s->nstreams). */
+/* The same for every streaming session. */
+void wsg_device_poll_streaming(struct wsg_device *d);
+/* Stop every session's streams (a power cycle). */
+void wsg_device_end_streams(struct wsg_device *d);
+/* Nothing for steps to do: model idle. Streams are counted apart
+ * (wsg_device_busy counts both). */
 int wsg_device_idle(const struct wsg_device *d);
+/* Steps matter: the model is not idle or a session streams. */
+int wsg_device_busy(const struct wsg_device *d);
 /* Advance simulated time by n steps while idle (the state cannot change, so
  * the loop may skip stepping through a quiet gap). */
 void wsg_device_advance_idle(struct wsg_device *d, uint64_t nsteps);

@@ -43,6 +43,9 @@ extern const struct wsg_cmd_desc wsg_cmd_table[256];
 /* Build and send one reply packet; records SF_CMD_FAILURE. */
 void wsg_device_reply(struct wsg_device *d, struct wsg_session *s, uint8_t id,
                       uint16_t status, const uint8_t *params, size_t len);
+/* Put s on the device's streaming list or take it off, after its
+ * nstreams changed. */
+void wsg_device_streams_changed(struct wsg_device *d, struct wsg_session *s);
 /* The current value of a stream's quantity, as sent on the wire. */
 size_t wsg_stream_value(const struct wsg_device *d, enum wsg_stream_id sid,
                         uint8_t *out, float *value);

@@ -256,9 +256,11 @@ static uint16_t wsg_cmd_stream(struct wsg_device *d, struct wsg_session *s,
     if (st->on)
         s->nstreams--;
     st->on = f->payload[0] & 1u;
+    if (st->on)
+        s->nstreams++;
+    wsg_device_streams_changed(d, s);
     if (!st->on)
         return WSG_E_SUCCESS;
-    s->nstreams++;
     st->change_only = (f->payload[0] >> 1) & 1u;
     /* PERIOD_MS 0 means as often as the model steps. */
     st->period_us = 1000u * wsg_get_u16(f->payload + 1);

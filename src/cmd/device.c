@@ -52,6 +52,8 @@ void wsg_device_reset(struct wsg_device *d)
 {
     wsg_axis_reset(&d->axis);
     d->cmd_failure = 0;
+    /* A gripper that powers up again streams nothing until asked. */
+    wsg_device_end_streams(d);
 }
 
 void wsg_session_init(struct wsg_session *s, uint32_t tag, unsigned flags,
@@ -64,13 +66,43 @@ void wsg_session_init(struct wsg_session *s, uint32_t tag, unsigned flags,
     s->ctx = ctx;
 }
 
+void wsg_device_streams_changed(struct wsg_device *d, struct wsg_session *s)
+{
+    if (s->nstreams > 0 && !s->stream_pprev) {
+        s->stream_next = d->streaming;
+        if (d->streaming)
+            d->streaming->stream_pprev = &s->stream_next;
+        d->streaming = s;
+        s->stream_pprev = &d->streaming;
+    } else if (s->nstreams == 0 && s->stream_pprev) {
+        *s->stream_pprev = s->stream_next;
+        if (s->stream_next)
+            s->stream_next->stream_pprev = s->stream_pprev;
+        s->stream_next = NULL;
+        s->stream_pprev = NULL;
+    }
+}
+
+static void wsg_session_end_streams(struct wsg_device *d,
+                                    struct wsg_session *s)
+{
+    s->nstreams = 0;
+    memset(s->streams, 0, sizeof s->streams);
+    wsg_device_streams_changed(d, s);
+}
+
 void wsg_device_session_closed(struct wsg_device *d, struct wsg_session *s)
 {
     if ((s->flags & WSG_SESSION_CONNECTION) && !s->announced &&
         d->disconnect_fast_stop)
         wsg_axis_request_fast_stop(&d->axis);
-    s->nstreams = 0;
-    memset(s->streams, 0, sizeof s->streams);
+    wsg_session_end_streams(d, s);
+}
+
+void wsg_device_end_streams(struct wsg_device *d)
+{
+    while (d->streaming)
+        wsg_session_end_streams(d, d->streaming);
 }
 
 void wsg_device_reply(struct wsg_device *d, struct wsg_session *s, uint8_t id,
@@ -191,6 +223,16 @@ void wsg_device_poll_streams(struct wsg_device *d, struct wsg_session *s)
     }
 }
 
+void wsg_device_poll_streaming(struct wsg_device *d)
+{
+    struct wsg_session *s;
+
+    /* Sending never ends a session here (transports only mark a peer that
+     * fails), so the list holds still while it is walked. */
+    for (s = d->streaming; s; s = s->stream_next)
+        wsg_device_poll_streams(d, s);
+}
+
 void wsg_device_step(struct wsg_device *d)
 {
     wsg_axis_step(&d->axis);
@@ -199,6 +241,11 @@ void wsg_device_step(struct wsg_device *d)
 int wsg_device_idle(const struct wsg_device *d)
 {
     return wsg_axis_idle(&d->axis);
+}
+
+int wsg_device_busy(const struct wsg_device *d)
+{
+    return d->streaming != NULL || !wsg_axis_idle(&d->axis);
 }
 
 void wsg_device_advance_idle(struct wsg_device *d, uint64_t nsteps)
