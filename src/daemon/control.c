@@ -31,6 +31,7 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include "gripper.h"
 #include "outq.h"
 
 #define WSG_CTL_READ_CHUNK 1024u
@@ -46,7 +47,8 @@ struct wsg_ctl_client {
     struct wsg_ctl *ctl;
     unsigned slot;
     int dead;
-    int overlong; /* discarding the rest of a too long line */
+    int overlong;     /* discarding the rest of a too long line */
+    unsigned gripper; /* the gripper this client's commands act on */
     uint32_t events;
     size_t len;
     char line[WSG_CTL_LINE_MAX + 1];
@@ -56,7 +58,8 @@ struct wsg_ctl_client {
 struct wsg_ctl {
     struct wsg_watch watch; /* the listening socket */
     struct wsg_loop *loop;
-    struct wsg_device *dev;
+    struct wsg_gripper *cur; /* the line being run acts on this one */
+    struct wsg_device *dev;  /* &cur->dev */
     unsigned nclients;
     unsigned ndead;
     char local[WSG_ADDR_LEN];
@@ -242,6 +245,8 @@ static void reply_time(struct wsg_ctl_client *c)
 {
     char t[32];
 
+    /* Steps run by hand may have left the gripper idle part way. */
+    wsg_loop_touch(c->ctl->loop, c->ctl->cur);
     format_time(t, sizeof t, c->ctl->dev->axis.time_us);
     reply(c, "ok %s", t);
 }
@@ -406,33 +411,62 @@ static void cmd_state(struct wsg_ctl_client *c)
 
 static void cmd_drop(struct wsg_ctl_client *c)
 {
-    struct wsg_loop *l = c->ctl->loop;
+    struct wsg_gripper *g = c->ctl->cur;
     unsigned n = 0;
     size_t i;
 
-    for (i = 0; i < l->ntransports; i++)
-        if (l->transports[i].ops->drop_all)
-            n += l->transports[i].ops->drop_all(&l->transports[i]);
+    for (i = 0; i < g->ntransports; i++)
+        if (g->transports[i].ops->drop_all)
+            n += g->transports[i].ops->drop_all(&g->transports[i]);
     reply(c, "ok dropped %u", n);
-}
-
-static void end_streams(void *ctx, struct wsg_session *s)
-{
-    (void)ctx;
-    s->nstreams = 0;
-    memset(s->streams, 0, sizeof s->streams);
 }
 
 static void cmd_reset(struct wsg_ctl_client *c)
 {
-    struct wsg_loop *l = c->ctl->loop;
-
+    /* Streams end with the power cycle (wsg_device_reset). */
     wsg_device_reset(c->ctl->dev);
-    /* A gripper that powers up again streams nothing until asked. */
-    wsg_transport_each_session(l->transports, l->ntransports, end_streams,
-                               NULL);
     reply(c, "ok reset");
 }
+
+static void cmd_gripper(struct wsg_ctl_client *c, int argc, char **argv)
+{
+    const struct wsg_loop *l = c->ctl->loop;
+    double v;
+
+    if (argc > 2) {
+        reply(c, "error usage: gripper [N]");
+        return;
+    }
+    if (argc == 2) {
+        if (!parse_num(argv[1], &v) || v < 0 || v != floor(v) ||
+            v >= (double)l->ngrippers) {
+            reply(c, "error gripper: N must be a gripper number in 0..%lu",
+                  (unsigned long)l->ngrippers - 1ul);
+            return;
+        }
+        c->gripper = (unsigned)v;
+    }
+    reply(c, "ok gripper %u of %lu", c->gripper, (unsigned long)l->ngrippers);
+}
+
+/* The loop's figures, for benchmarks and to see a fleet's state. */
+static void cmd_stats(struct wsg_ctl_client *c)
+{
+    const struct wsg_loop *l = c->ctl->loop;
+
+    reply(c,
+          "ok {\"grippers\":%lu,\"active\":%lu,\"steps\":%llu,"
+          "\"gripper_steps\":%llu,\"overruns\":%llu,\"idle_steps\":%llu,"
+          "\"late_max_us\":%.1f,\"step_us\":%.0f,\"scale\":%g,"
+          "\"paused\":%s}",
+          (unsigned long)l->ngrippers, (unsigned long)l->nactive,
+          (unsigned long long)l->steps, (unsigned long long)l->dev_steps,
+          (unsigned long long)l->overruns, (unsigned long long)l->idle_steps,
+          (double)l->late_max_ns / 1000.0, (double)l->step_ns / 1000.0,
+          l->scale, l->paused ? "true" : "false");
+}
+
+static void run_command(struct wsg_ctl_client *c, int argc, char **argv);
 
 static void run_line(struct wsg_ctl_client *c, char *line)
 {
@@ -458,6 +492,18 @@ static void run_line(struct wsg_ctl_client *c, char *line)
     /* An empty line asks nothing (nc users hit return twice). */
     if (argc == 0)
         return;
+    /* The selected gripper's time is brought up to the grid before the
+     * command reads or changes it; afterwards it is stepped if it now has
+     * work. */
+    c->ctl->cur = &c->ctl->loop->grippers[c->gripper];
+    c->ctl->dev = &c->ctl->cur->dev;
+    wsg_loop_touch(c->ctl->loop, c->ctl->cur);
+    run_command(c, argc, argv);
+    wsg_loop_check(c->ctl->loop, c->ctl->cur);
+}
+
+static void run_command(struct wsg_ctl_client *c, int argc, char **argv)
+{
     if (strcmp(argv[0], "part") == 0)
         cmd_part(c, argc, argv);
     else if (strcmp(argv[0], "obstacle") == 0)
@@ -466,9 +512,12 @@ static void run_line(struct wsg_ctl_client *c, char *line)
         cmd_fault(c, argc, argv);
     else if (strcmp(argv[0], "time") == 0)
         cmd_time(c, argc, argv);
+    else if (strcmp(argv[0], "gripper") == 0)
+        cmd_gripper(c, argc, argv);
     else if (argc > 1 &&
              (strcmp(argv[0], "state") == 0 || strcmp(argv[0], "drop") == 0 ||
-              strcmp(argv[0], "reset") == 0 || strcmp(argv[0], "help") == 0))
+              strcmp(argv[0], "reset") == 0 || strcmp(argv[0], "help") == 0 ||
+              strcmp(argv[0], "stats") == 0))
         reply(c, "error %s takes no arguments", argv[0]);
     else if (strcmp(argv[0], "state") == 0)
         cmd_state(c);
@@ -476,10 +525,12 @@ static void run_line(struct wsg_ctl_client *c, char *line)
         cmd_drop(c);
     else if (strcmp(argv[0], "reset") == 0)
         cmd_reset(c);
+    else if (strcmp(argv[0], "stats") == 0)
+        cmd_stats(c);
     else if (strcmp(argv[0], "help") == 0)
         reply(c, "ok commands: part WIDTH [STIFFNESS]|none, obstacle "
                  "WIDTH|none, fault NAME on|off, time [scale X|pause|step "
-                 "MS|resume], state, drop, reset");
+                 "MS|resume], state, drop, reset, gripper [N], stats");
     else
         reply(c, "error unknown command '%.32s' (try help)", argv[0]);
 }
@@ -656,7 +707,6 @@ static int ctl_open(struct wsg_transport *t,
         return -ENOMEM;
     }
     ctl->loop = env->loop;
-    ctl->dev = env->dev;
     ctl->watch.owner = t;
     r = wsg_transport_listen_tcp(&env->opt->control, (int)WSG_CTL_CLIENTS_MAX,
                                  "control", ctl->local, sizeof ctl->local, err,

@@ -331,12 +331,13 @@ static void decode_out(struct line *l, uint8_t id, const uint8_t *p, size_t n)
 }
 
 /* Wall clock, simulated time, peer, direction, ID and name. */
-static void head(struct wsg_log *lg, struct line *l,
+static void head(struct wsg_log_tap *tap, struct line *l,
                  const struct wsg_session *s, const char *dir, uint8_t id)
 {
+    struct wsg_log *lg = tap->log;
     struct timespec ts;
     const char *name = wsg_cmd_name(id);
-    uint64_t t = lg->dev->axis.time_us;
+    uint64_t t = tap->dev->axis.time_us;
 
     clock_gettime(CLOCK_REALTIME, &ts);
     if (ts.tv_sec != lg->sec || lg->clock[0] == '\0') {
@@ -354,6 +355,11 @@ static void head(struct wsg_log *lg, struct line *l,
     put(l, ".", 1);
     put_uint(l, (unsigned long long)(t % 1000000u), 6);
     put(l, " ", 1);
+    if (tap->index >= 0) {
+        put(l, "#", 1);
+        put_uint(l, (unsigned long long)tap->index, 1);
+        put(l, " ", 1);
+    }
     put_str(l, s->peer[0] ? s->peer : "?");
     put(l, " ", 1);
     put_str(l, dir);
@@ -374,24 +380,24 @@ static void emit(struct wsg_log *lg, struct line *l)
 static void log_in(void *ctx, const struct wsg_session *s,
                    const struct wsg_frame *f, enum wsg_parse_event ev)
 {
-    struct wsg_log *lg = ctx;
+    struct wsg_log_tap *tap = ctx;
     struct line l;
 
     l.n = 0;
-    head(lg, &l, s, "in", f->id);
+    head(tap, &l, s, "in", f->id);
     if (ev == WSG_PARSE_BAD_CRC)
         add(&l, " checksum-error");
     else if (ev == WSG_PARSE_OVERSIZE)
         add(&l, " oversize");
     else
         decode_in(&l, f->id, f->payload, f->len);
-    emit(lg, &l);
+    emit(tap->log, &l);
 }
 
 static void log_out(void *ctx, const struct wsg_session *s, const uint8_t *pkt,
                     size_t len)
 {
-    struct wsg_log *lg = ctx;
+    struct wsg_log_tap *tap = ctx;
     struct line l;
     size_t n;
 
@@ -403,20 +409,18 @@ static void log_out(void *ctx, const struct wsg_session *s, const uint8_t *pkt,
     if (n < 2 || WSG_HEADER_LEN + n + WSG_CRC_LEN > len)
         return;
     l.n = 0;
-    head(lg, &l, s, "out", pkt[3]);
+    head(tap, &l, s, "out", pkt[3]);
     put(&l, " ", 1);
     put_str(&l, wsg_status_name(wsg_get_u16(pkt + WSG_HEADER_LEN)));
     decode_out(&l, pkt[3], pkt + WSG_HEADER_LEN + 2, n - 2);
-    emit(lg, &l);
+    emit(tap->log, &l);
 }
 
-int wsg_log_open(struct wsg_log *l, struct wsg_device *d, const char *path,
-                 char *err, size_t errcap)
+int wsg_log_open(struct wsg_log *l, const char *path, char *err, size_t errcap)
 {
     int r;
 
     memset(l, 0, sizeof *l);
-    l->dev = d;
     if (strcmp(path, "-") == 0) {
         /* A terminal watcher wants each line as it happens; stderr is
          * unbuffered by default, line buffering keeps lines whole. */
@@ -436,10 +440,27 @@ int wsg_log_open(struct wsg_log *l, struct wsg_device *d, const char *path,
         if (l->buf)
             setvbuf(l->f, l->buf, _IOFBF, WSG_LOG_BUFSIZE);
     }
+    return 0;
+}
+
+void wsg_log_attach(struct wsg_log *l, struct wsg_log_tap *tap,
+                    struct wsg_device *d, int index)
+{
+    tap->log = l;
+    tap->dev = d;
+    tap->index = index;
     d->trace_in = log_in;
     d->trace_out = log_out;
-    d->trace_ctx = l;
-    return 0;
+    d->trace_ctx = tap;
+}
+
+void wsg_log_detach(struct wsg_log_tap *tap, struct wsg_device *d)
+{
+    if (d->trace_ctx != tap)
+        return;
+    d->trace_in = NULL;
+    d->trace_out = NULL;
+    d->trace_ctx = NULL;
 }
 
 void wsg_log_flush(struct wsg_log *l)
@@ -448,13 +469,8 @@ void wsg_log_flush(struct wsg_log *l)
         fflush(l->f);
 }
 
-void wsg_log_close(struct wsg_log *l, struct wsg_device *d)
+void wsg_log_close(struct wsg_log *l)
 {
-    if (d && d->trace_ctx == l) {
-        d->trace_in = NULL;
-        d->trace_out = NULL;
-        d->trace_ctx = NULL;
-    }
     if (!l->f)
         return;
     fflush(l->f);

@@ -8,8 +8,9 @@
  * Line format (fields separated by one space):
  *   HH:MM:SS.mmm t=SIM PEER DIR ID NAME [STATUS] [PARAMS]
  * HH:MM:SS.mmm is the local wall clock, SIM the device's simulated time in
- * seconds, PEER the session's peer ("tcp 127.0.0.1:51234"), DIR "in" for a
- * packet the gripper received and "out" for one it sent, ID the command ID
+ * seconds, PEER the session's peer ("tcp 127.0.0.1:51234"; in a fleet
+ * prefixed with the gripper's number: "#3 tcp 127.0.0.1:51234"), DIR "in" for
+ * a packet the gripper received and "out" for one it sent, ID the command ID
  * as "20h", NAME the command's name ("Homing", "unknown" for an ID the
  * table lacks), STATUS a reply's status name (E_SUCCESS, ...). PARAMS are
  * decoded as name=value (floats with 3 decimals, flags by name) where the
@@ -30,21 +31,32 @@
 #define WSG_LOG_BUFSIZE 65536u
 
 struct wsg_log {
-    FILE *f;   /* NULL: closed */
-    int own;   /* opened here (fclose it), not stderr */
-    char *buf; /* setvbuf's buffer, owned */
-    const struct wsg_device *dev;
+    FILE *f;       /* NULL: closed */
+    int own;       /* opened here (fclose it), not stderr */
+    char *buf;     /* setvbuf's buffer, owned */
     time_t sec;    /* wall clock second that clock[] shows */
     char clock[9]; /* "HH:MM:SS" of sec, cached: localtime per line costs */
 };
 
-/* Open path ("-": stderr) and hook the log into d's trace callbacks.
- * Returns 0, or -errno with the reason in err. */
-int wsg_log_open(struct wsg_log *l, struct wsg_device *d, const char *path,
-                 char *err, size_t errcap);
+/* One device's hook into the log (its trace context). */
+struct wsg_log_tap {
+    struct wsg_log *log;
+    const struct wsg_device *dev; /* whose simulated time lines show */
+    int index;                    /* gripper number in a fleet; -1: none */
+};
+
+/* Open path ("-": stderr). Returns 0, or -errno with the reason in err. */
+int wsg_log_open(struct wsg_log *l, const char *path, char *err,
+                 size_t errcap);
+/* Hook d's trace callbacks into the log through tap (which must live as
+ * long as the hook). */
+void wsg_log_attach(struct wsg_log *l, struct wsg_log_tap *tap,
+                    struct wsg_device *d, int index);
+/* Unhook d if tap is its hook; safe on a zeroed tap. */
+void wsg_log_detach(struct wsg_log_tap *tap, struct wsg_device *d);
 /* Write out what is buffered (after a batch of events). */
 void wsg_log_flush(struct wsg_log *l);
-/* Unhook, flush and close; safe on a log never opened (zeroed). */
-void wsg_log_close(struct wsg_log *l, struct wsg_device *d);
+/* Flush and close; safe on a log never opened (zeroed). */
+void wsg_log_close(struct wsg_log *l);
 
 #endif

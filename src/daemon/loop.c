@@ -1,11 +1,15 @@
 /*
  * The epoll loop. Model steps follow a fixed grid of CLOCK_MONOTONIC times
  * (due_ns, due_ns + step, ...) set on an absolute periodic timerfd, so the
- * model's simulated time tracks the wall clock without drift from wake-up
- * latency. While the model is idle and nobody streams, the timer is disarmed
- * and the grid points that pass are accounted for in one
- * wsg_device_advance_idle call at the next wake, which keeps simulated time
- * (and with it stream and motion timing) on the same grid.
+ * models' simulated time tracks the wall clock without drift from wake-up
+ * latency. l->grid counts the grid points passed: the simulated time of
+ * every gripper that is stepped. A gripper with nothing to do (idle model,
+ * no stream) is off the active list and not stepped; its device time lags
+ * and is brought to the grid in one wsg_device_advance_idle call when an
+ * event or the control channel touches it, which keeps simulated time
+ * (and with it stream and motion timing) on the same grid. With no active
+ * gripper the timer is disarmed and the grid points that pass are counted
+ * at the next wake.
  *
  * With a time scale X the grid's period is step / X of real time, and
  * below WSG_LOOP_PERIOD_MIN_NS a tick runs several steps instead, so
@@ -24,6 +28,7 @@
 
 #include <errno.h>
 #include <signal.h>
+#include <stdlib.h>
 #include <string.h>
 #include <sys/epoll.h>
 #include <sys/signalfd.h>
@@ -31,6 +36,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "gripper.h"
 #include "transport.h"
 
 #define NS_PER_S  1000000000ull
@@ -84,7 +90,7 @@ int wsg_loop_watch_del(struct wsg_loop *l, struct wsg_watch *w)
     return epoll_op(l, EPOLL_CTL_DEL, w, 0);
 }
 
-int wsg_loop_init(struct wsg_loop *l, struct wsg_device *dev, uint32_t step_us)
+int wsg_loop_init(struct wsg_loop *l, uint32_t step_us)
 {
     sigset_t mask;
     int r;
@@ -93,7 +99,6 @@ int wsg_loop_init(struct wsg_loop *l, struct wsg_device *dev, uint32_t step_us)
     l->epfd = -1;
     l->timer.fd = -1;
     l->signal.fd = -1;
-    l->dev = dev;
     l->step_ns = (uint64_t)step_us * NS_PER_US;
     l->scale = 1.0;
     l->period_ns = l->step_ns;
@@ -108,6 +113,14 @@ int wsg_loop_init(struct wsg_loop *l, struct wsg_device *dev, uint32_t step_us)
     if (sigprocmask(SIG_BLOCK, &mask, NULL) < 0)
         return -errno;
 
+    /* One receive buffer for every transport: the loop runs one handler at
+     * a time, and a fleet must not hold a datagram's worth per gripper. */
+    l->rxlen = WSG_LOOP_RX_MAX;
+    l->rx = malloc(l->rxlen);
+    if (!l->rx) {
+        r = -ENOMEM;
+        goto fail_r;
+    }
     l->epfd = epoll_create1(EPOLL_CLOEXEC);
     if (l->epfd < 0)
         goto fail;
@@ -145,60 +158,98 @@ void wsg_loop_fini(struct wsg_loop *l)
     l->timer.fd = -1;
     l->signal.fd = -1;
     l->epfd = -1;
+    free(l->rx);
+    l->rx = NULL;
 }
 
-void wsg_loop_set_transports(struct wsg_loop *l, struct wsg_transport *t,
-                             size_t n)
+void wsg_loop_set_grippers(struct wsg_loop *l, struct wsg_gripper *g, size_t n)
 {
-    l->transports = t;
-    l->ntransports = n;
+    l->grippers = g;
+    l->ngrippers = n;
 }
 
-static void poll_one(void *ctx, struct wsg_session *s)
+void wsg_loop_set_shared(struct wsg_loop *l, struct wsg_transport *t, size_t n)
 {
-    struct wsg_loop *l = ctx;
-
-    if (s->nstreams > 0)
-        wsg_device_poll_streams(l->dev, s);
+    l->shared = t;
+    l->nshared = n;
 }
 
-static void count_streaming(void *ctx, struct wsg_session *s)
+/* An inactive gripper's time lagged: it was idle all along, so the steps
+ * it missed change nothing but its clock. */
+static void sync_time(struct wsg_loop *l, struct wsg_gripper *g)
 {
-    int *streaming = ctx;
-
-    if (s->nstreams > 0)
-        *streaming = 1;
+    if (g->active || g->at == l->grid)
+        return;
+    wsg_device_advance_idle(&g->dev, l->grid - g->at);
+    g->at = l->grid;
 }
 
-static void run_step(struct wsg_loop *l)
+static void queue_touched(struct wsg_loop *l, struct wsg_gripper *g)
 {
-    wsg_device_step(l->dev);
-    wsg_transport_each_session(l->transports, l->ntransports, poll_one, l);
-    l->steps++;
+    if (g->touched)
+        return;
+    g->touched = 1;
+    g->next_touched = l->touched;
+    l->touched = g;
+}
+
+void wsg_loop_touch(struct wsg_loop *l, struct wsg_gripper *g)
+{
+    sync_time(l, g);
+    queue_touched(l, g);
+}
+
+void wsg_loop_check(struct wsg_loop *l, struct wsg_gripper *g)
+{
+    if (g->active || !wsg_device_busy(&g->dev))
+        return;
+    sync_time(l, g);
+    g->active = 1;
+    g->next_active = l->active;
+    l->active = g;
+    l->nactive++;
+}
+
+/* One grid step, k model steps per active gripper (a tick at a fast time
+ * scale runs several): each is stepped, its streams polled, and it leaves
+ * the list when nothing is left to do. */
+static void run_steps(struct wsg_loop *l, unsigned k)
+{
+    struct wsg_gripper **pp = &l->active;
+    struct wsg_gripper *g;
+
+    while ((g = *pp) != NULL) {
+        unsigned i;
+
+        for (i = 0; i < k; i++) {
+            wsg_device_step(&g->dev);
+            wsg_device_poll_streaming(&g->dev);
+        }
+        l->dev_steps += k;
+        g->at += k;
+        /* A final result sent may have ended a peer: settle after. */
+        queue_touched(l, g);
+        if (wsg_device_busy(&g->dev)) {
+            pp = &g->next_active;
+        } else {
+            *pp = g->next_active;
+            g->active = 0;
+            l->nactive--;
+        }
+    }
+    l->grid += k;
+    l->steps += k;
 }
 
 static void run_tick(struct wsg_loop *l)
 {
-    unsigned i;
-
-    for (i = 0; i < l->tick_steps; i++)
-        run_step(l);
+    run_steps(l, l->tick_steps);
 }
 
-static int needs_steps(struct wsg_loop *l)
-{
-    int streaming = 0;
-
-    if (!wsg_device_idle(l->dev))
-        return 1;
-    wsg_transport_each_session(l->transports, l->ntransports, count_streaming,
-                               &streaming);
-    return streaming;
-}
-
-/* While disarmed the model was idle: the grid points up to now passed
- * without a step, and only simulated time has to catch up. Done before the
- * batch's events are handled, because their input may end the idleness. */
+/* While disarmed nothing was active: the grid points up to now passed
+ * without a step and are only counted; each gripper catches up when it is
+ * touched. Done before the batch's events are handled, because their input
+ * may end the idleness. */
 static void skip_idle(struct wsg_loop *l, uint64_t now)
 {
     uint64_t n;
@@ -206,7 +257,7 @@ static void skip_idle(struct wsg_loop *l, uint64_t now)
     if (l->paused || l->due_ns > now)
         return;
     n = (now - l->due_ns) / l->period_ns + 1;
-    wsg_device_advance_idle(l->dev, n * l->tick_steps);
+    l->grid += n * l->tick_steps;
     l->due_ns += n * l->period_ns;
     l->idle_steps += n * l->tick_steps;
 }
@@ -228,7 +279,7 @@ static int set_timer(struct wsg_loop *l, int arm)
 
 static int update_timer(struct wsg_loop *l)
 {
-    int want = !l->paused && needs_steps(l);
+    int want = !l->paused && l->active != NULL;
 
     if (want == l->armed)
         return 0;
@@ -251,6 +302,8 @@ static void on_timer(struct wsg_loop *l)
     if (!l->armed)
         return;
     now = mono_ns();
+    if (l->due_ns <= now && now - l->due_ns > l->late_max_ns)
+        l->late_max_ns = now - l->due_ns;
     while (l->due_ns <= now && n < WSG_LOOP_CATCHUP_MAX) {
         run_tick(l);
         l->due_ns += l->period_ns;
@@ -329,12 +382,12 @@ int wsg_loop_step(struct wsg_loop *l, uint64_t nsteps)
     while (nsteps > 0) {
         /* Nothing to do and no input can arrive meanwhile: the rest would
          * change nothing but the time. */
-        if (!needs_steps(l)) {
-            wsg_device_advance_idle(l->dev, nsteps);
+        if (!l->active) {
+            l->grid += nsteps;
             l->idle_steps += nsteps;
             break;
         }
-        run_step(l);
+        run_steps(l, 1);
         nsteps--;
     }
     return 0;
@@ -347,6 +400,21 @@ static void on_signal(struct wsg_loop *l)
     while (read(l->signal.fd, &si, sizeof si) == (ssize_t)sizeof si)
         if (si.ssi_signo == SIGINT || si.ssi_signo == SIGTERM)
             l->stop = 1;
+}
+
+/* Closing a peer may FAST STOP a model, so the active list (and with it
+ * the timer) is decided after the closes. */
+static void settle(struct wsg_loop *l)
+{
+    struct wsg_gripper *g;
+
+    wsg_transport_settle(l->shared, l->nshared);
+    while ((g = l->touched) != NULL) {
+        l->touched = g->next_touched;
+        g->touched = 0;
+        wsg_transport_settle(g->transports, g->ntransports);
+        wsg_loop_check(l, g);
+    }
 }
 
 int wsg_loop_run(struct wsg_loop *l)
@@ -370,17 +438,21 @@ int wsg_loop_run(struct wsg_loop *l)
             skip_idle(l, mono_ns());
         for (i = 0; i < n; i++) {
             struct wsg_watch *w = ev[i].data.ptr;
+            struct wsg_gripper *g = w->owner ? w->owner->gripper : NULL;
 
+            if (g)
+                wsg_loop_touch(l, g);
             if (w->owner)
                 w->owner->ops->handle(w->owner, w, ev[i].events);
             else if (w == &l->timer)
                 on_timer(l);
             else if (w == &l->signal)
                 on_signal(l);
+            /* From the next tick, even one in this batch. */
+            if (g)
+                wsg_loop_check(l, g);
         }
-        /* Closing a peer may FAST STOP the model, so the timer is decided
-         * after it. */
-        wsg_transport_settle(l->transports, l->ntransports);
+        settle(l);
         r = update_timer(l);
         if (r < 0)
             return r;

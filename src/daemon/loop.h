@@ -1,8 +1,11 @@
 /*
  * The daemon's single epoll loop: the transports' file descriptors, a
- * timerfd that paces the model's fixed steps on an absolute grid, and a
- * signalfd for SIGINT/SIGTERM. The timer runs only while the model has work
- * or a session streams auto-updates, so an idle emulator does not wake.
+ * timerfd that paces the models' fixed steps on an absolute grid, and a
+ * signalfd for SIGINT/SIGTERM. It serves one gripper or a fleet of them
+ * (--grippers). Only grippers whose model has work or whose sessions
+ * stream auto-updates are on the active list and stepped; the timer runs
+ * only while that list is not empty, so an idle emulator does not wake and
+ * a fleet costs what moves, not what exists.
  *
  * Time control (the control channel): simulated time runs at a scale of
  * real time, can be paused, and stepped by hand while paused. Only the loop
@@ -19,6 +22,8 @@
 /* Steps run per timer wake at most; a loop further behind skips ahead. */
 #define WSG_LOOP_CATCHUP_MAX 50u
 #define WSG_LOOP_EVENTS      64
+/* The shared receive buffer: the largest datagram. */
+#define WSG_LOOP_RX_MAX 65536u
 /* The shortest timer period: a faster scale runs several steps per tick
  * rather than waking more often than this. */
 #define WSG_LOOP_PERIOD_MIN_NS 50000ull
@@ -27,6 +32,7 @@
 #define WSG_LOOP_SCALE_MAX 1000.0
 
 struct wsg_transport;
+struct wsg_gripper;
 
 /* What epoll_event.data.ptr points at for every watched descriptor. Owners
  * embed it (first, or found by comparing addresses) in their own structs. */
@@ -39,9 +45,15 @@ struct wsg_loop {
     int epfd;
     struct wsg_watch timer;  /* timerfd */
     struct wsg_watch signal; /* signalfd */
-    struct wsg_device *dev;
-    struct wsg_transport *transports;
-    size_t ntransports;
+    struct wsg_gripper *grippers;
+    size_t ngrippers;
+    /* Transports of the process, not of a gripper (the control channel). */
+    struct wsg_transport *shared;
+    size_t nshared;
+    struct wsg_gripper *active;  /* stepped on every tick */
+    struct wsg_gripper *touched; /* to settle after this batch */
+    size_t nactive;
+    uint64_t grid;       /* simulated time in steps: grid points passed */
     uint64_t step_ns;    /* simulated time of one model step */
     double scale;        /* simulated seconds per real second */
     uint64_t period_ns;  /* real time between timer ticks */
@@ -50,9 +62,13 @@ struct wsg_loop {
     int armed;
     int paused; /* simulated time stands still (steps only by hand) */
     int stop;
-    uint64_t steps;      /* steps run */
-    uint64_t overruns;   /* steps skipped because the loop fell behind */
-    uint64_t idle_steps; /* steps passed over with wsg_device_advance_idle */
+    uint64_t steps;       /* grid steps run with the timer or by hand */
+    uint64_t dev_steps;   /* model steps run, over all grippers */
+    uint64_t overruns;    /* grid steps skipped: the loop fell behind */
+    uint64_t idle_steps;  /* grid steps passed with nothing active */
+    uint64_t late_max_ns; /* worst lateness of a tick run by the timer */
+    uint8_t *rx;          /* receive buffer the transports share */
+    size_t rxlen;
     /* Optional: called after each batch of events is handled (the
      * communication log flushes there: one write per batch, not per
      * packet). */
@@ -64,12 +80,20 @@ struct wsg_loop {
  * descriptors. Returns 0 or -errno; wsg_loop_fini is safe either way. The
  * signals stay blocked after fini: a second SIGTERM must not turn a clean
  * exit into death by signal. */
-int wsg_loop_init(struct wsg_loop *l, struct wsg_device *dev,
-                  uint32_t step_us);
+int wsg_loop_init(struct wsg_loop *l, uint32_t step_us);
 void wsg_loop_fini(struct wsg_loop *l);
-/* The transports whose events, sessions and closes the loop serves. */
-void wsg_loop_set_transports(struct wsg_loop *l, struct wsg_transport *t,
-                             size_t n);
+/* The grippers the loop steps, and the process's own transports whose
+ * peers it settles after each batch. */
+void wsg_loop_set_grippers(struct wsg_loop *l, struct wsg_gripper *g,
+                           size_t n);
+void wsg_loop_set_shared(struct wsg_loop *l, struct wsg_transport *t,
+                         size_t n);
+/* Before anything acts on g from outside the loop's own dispatch (the
+ * control channel): bring g's simulated time up to the grid and queue it
+ * to be settled after the batch. */
+void wsg_loop_touch(struct wsg_loop *l, struct wsg_gripper *g);
+/* After acting on g: step it from the next tick if it now has work. */
+void wsg_loop_check(struct wsg_loop *l, struct wsg_gripper *g);
 /* Simulated time at scale times real time, re-gridded from now. 0, or
  * -EINVAL for a scale outside [WSG_LOOP_SCALE_MIN, WSG_LOOP_SCALE_MAX]. A
  * paused loop stays paused and takes the scale on when resumed. */
@@ -78,9 +102,9 @@ int wsg_loop_set_scale(struct wsg_loop *l, double scale);
 int wsg_loop_pause(struct wsg_loop *l);
 /* Run simulated time again from now, keeping the model's time. */
 int wsg_loop_resume(struct wsg_loop *l);
-/* While paused: run nsteps model steps right away, each followed by the
- * sessions' stream polls (steps the model would skip while idle are only
- * counted). Returns 0, or -EBUSY when not paused. */
+/* While paused: run nsteps grid steps right away, each a model step and
+ * the stream polls of every active gripper (steps with nothing active are
+ * only counted). Returns 0, or -EBUSY when not paused. */
 int wsg_loop_step(struct wsg_loop *l, uint64_t nsteps);
 /* Serve until SIGINT or SIGTERM: returns 0 then, -errno on failure. */
 int wsg_loop_run(struct wsg_loop *l);

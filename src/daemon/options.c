@@ -44,7 +44,8 @@ enum {
     OPT_CONTROL,
     OPT_LOG,
     OPT_CONFIG,
-    OPT_MAX_CLIENTS
+    OPT_MAX_CLIENTS,
+    OPT_GRIPPERS
 };
 
 /* The config file's keys are these names too (without the dashes). */
@@ -74,6 +75,7 @@ static const struct option long_options[] = {
     {"control", required_argument, NULL, OPT_CONTROL},
     {"log", required_argument, NULL, OPT_LOG},
     {"config", required_argument, NULL, OPT_CONFIG},
+    {"grippers", required_argument, NULL, OPT_GRIPPERS},
     {"help", no_argument, NULL, 'h'},
     {NULL, 0, NULL, 0}};
 
@@ -138,6 +140,10 @@ static void usage(FILE *f)
         "                             packet; '-' for stderr\n"
         "  --config FILE              read settings from FILE first; the\n"
         "                             command line overrides them\n"
+        "  --grippers N               N independent grippers in one\n"
+        "                             process (1..%u, default 1); each\n"
+        "                             gets its own interfaces, counted up\n"
+        "                             from the ones given (see README)\n"
         "  -h, --help                 show this help and exit\n"
         "\n"
         "Config file: one 'key = value' per line, the keys the long option\n"
@@ -155,10 +161,11 @@ static void usage(FILE *f)
         "When every interface is open, one line is printed on stdout:\n"
         "  ready tcp=ADDR:PORT udp=ADDR:PORT>REMOTE pty=PATH can=IFACE:ID\n"
         "        control=ADDR:PORT\n"
-        "(the fields of the open interfaces only).\n"
+        "(the fields of the open interfaces only; with --grippers N each\n"
+        "gripper field lists N values, comma-separated, in gripper order).\n"
         "SIGINT or SIGTERM stops the emulator with exit status 0.\n",
         WSG_MAX_CLIENTS_MAX, WSG_MAX_CLIENTS_DEFAULT, WSG_STEP_US_MIN,
-        WSG_STEP_US_MAX, WSG_STEP_US_DEFAULT);
+        WSG_STEP_US_MAX, WSG_STEP_US_DEFAULT, WSG_GRIPPERS_MAX);
 }
 
 /* Decimal digits only: strtoul would also take signs, spaces and hex. */
@@ -417,6 +424,14 @@ static int set_option(struct wsg_options *o, int id, const char *val,
         }
         break;
     }
+    case OPT_GRIPPERS:
+        if (parse_uint(val, WSG_GRIPPERS_MAX, &v) < 0 || v < 1) {
+            snprintf(err, errcap, "'%s' is not a number in 1..%u", val,
+                     WSG_GRIPPERS_MAX);
+            return -1;
+        }
+        o->grippers = (unsigned)v;
+        break;
     case OPT_MAX_CLIENTS:
         if (parse_uint(val, WSG_MAX_CLIENTS_MAX, &v) < 0 || v < 1) {
             snprintf(err, errcap, "'%s' is not a number in 1..%u", val,
@@ -555,6 +570,7 @@ void wsg_options_defaults(struct wsg_options *o)
     o->tcp.addr[3] = 1;
     o->tcp.port = WSG_TCP_PORT_DEFAULT;
     o->max_clients = WSG_MAX_CLIENTS_DEFAULT;
+    o->grippers = 1;
     o->udp.addr[0] = 127;
     o->udp.addr[3] = 1;
     o->udp.port = WSG_UDP_PORT_DEFAULT;
@@ -604,6 +620,93 @@ static int check_range(const struct wsg_options *o, double v, double lo,
     return -1;
 }
 
+/* The UDP ports of a fleet go up in pairs: by one when the listening and
+ * reply ranges stay apart, else by two when listening and reply ports
+ * differ by an odd number (1500:1501 gives 1500:1501, 1502:1503, ...), so
+ * no gripper listens on a port another one answers to. 0: no stride
+ * keeps them apart. */
+static unsigned udp_stride(const struct wsg_options *o)
+{
+    long d = (long)o->udp_remote_port - (long)o->udp.port;
+
+    if (o->grippers <= 1 || o->udp.port == 0 || labs(d) >= (long)o->grippers)
+        return 1;
+    return (d % 2 != 0) ? 2 : 0;
+}
+
+/* Counting up must stay within the ranges of ports and CAN IDs. */
+static enum wsg_options_result check_fleet(const struct wsg_options *o)
+{
+    unsigned long last = o->grippers - 1ul;
+    unsigned stride = udp_stride(o);
+
+    if (o->grippers <= 1)
+        return WSG_OPTIONS_RUN;
+    if (o->tcp_enabled && o->tcp.port != 0 && o->tcp.port + last > 65535ul) {
+        fprintf(stderr,
+                "wsgemu: --grippers %u: TCP ports %u..%lu go past 65535\n",
+                o->grippers, o->tcp.port, o->tcp.port + last);
+        return WSG_OPTIONS_ERROR;
+    }
+    if (o->udp_enabled && stride == 0) {
+        fprintf(stderr,
+                "wsgemu: --grippers %u: UDP ports from %u and reply ports "
+                "from %u would overlap; give --udp PORT:REMOTE with REMOTE "
+                "at least %u away from PORT, or an odd distance\n",
+                o->grippers, o->udp.port, o->udp_remote_port, o->grippers);
+        return WSG_OPTIONS_ERROR;
+    }
+    if (o->udp_enabled &&
+        ((o->udp.port != 0 && o->udp.port + last * stride > 65535ul) ||
+         o->udp_remote_port + last * stride > 65535ul)) {
+        fprintf(stderr,
+                "wsgemu: --grippers %u: UDP ports from %u and reply ports "
+                "from %u, %u apart, go past 65535\n",
+                o->grippers, o->udp.port, o->udp_remote_port, stride);
+        return WSG_OPTIONS_ERROR;
+    }
+    if (o->can_iface && o->can_id + 2ul * last > WSG_CAN_ID_MAX) {
+        fprintf(stderr,
+                "wsgemu: --grippers %u: CAN IDs 0x%03X..0x%03lX go past "
+                "0x7FF (each gripper takes two)\n",
+                o->grippers, o->can_id, o->can_id + 2ul * last + 1ul);
+        return WSG_OPTIONS_ERROR;
+    }
+    return WSG_OPTIONS_RUN;
+}
+
+void wsg_options_gripper(const struct wsg_options *o, unsigned i,
+                         struct wsg_options *out, char *path, size_t pathlen)
+{
+    unsigned stride = udp_stride(o);
+
+    *out = *o;
+    if (o->grippers <= 1)
+        return;
+    if (out->tcp.port != 0)
+        out->tcp.port = (uint16_t)(out->tcp.port + i);
+    if (out->udp.port != 0)
+        out->udp.port = (uint16_t)(out->udp.port + i * stride);
+    out->udp_remote_port = (uint16_t)(out->udp_remote_port + i * stride);
+    out->can_id = (uint16_t)(out->can_id + 2u * i);
+    out->serial = o->serial + i;
+    if (o->pty_path) {
+        /* A number at the end counts up ("/tmp/wsg7": 7, 8, ...), else
+         * the gripper's number is appended ("/tmp/wsg": 0, 1, ...). */
+        size_t n = strlen(o->pty_path);
+        size_t k = n;
+        unsigned long base = 0;
+
+        while (k > 0 && isdigit((unsigned char)o->pty_path[k - 1]) &&
+               n - k < 9)
+            k--;
+        if (k < n)
+            base = strtoul(o->pty_path + k, NULL, 10);
+        snprintf(path, pathlen, "%.*s%lu", (int)k, o->pty_path, base + i);
+        out->pty_path = path;
+    }
+}
+
 /* Everything that needs the model: resolve it, check the settings against
  * its limits (an error, not a silent clamp: a setting the gripper would
  * not take is a mistake in the setup) and write them into its config. */
@@ -650,7 +753,7 @@ static enum wsg_options_result finish(struct wsg_options *o)
         return WSG_OPTIONS_ERROR;
     if (o->homing_dir != WSG_HOME_DEFAULT)
         c->homing_dir = o->homing_dir;
-    return WSG_OPTIONS_RUN;
+    return check_fleet(o);
 }
 
 /* Read the config file: "key = value" lines over the current options. */

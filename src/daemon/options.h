@@ -30,6 +30,11 @@
  * number of connection slots the TCP transport has. */
 #define WSG_MAX_CLIENTS_DEFAULT 64u
 #define WSG_MAX_CLIENTS_MAX     256u
+/* --grippers: a fleet in one process. The ceiling is generous for a CI
+ * farm's box; descriptors (a few per gripper) run out well before it. */
+#define WSG_GRIPPERS_MAX 10000u
+/* Room for a pty path with a fleet's number counted into it. */
+#define WSG_OPTIONS_PATH_MAX 4096u
 
 /* An IPv4 endpoint as given on the command line. */
 struct wsg_endpoint {
@@ -43,6 +48,7 @@ struct wsg_options {
     int tcp_enabled;
     struct wsg_endpoint tcp;
     unsigned max_clients; /* TCP connections at once; more are refused */
+    unsigned grippers;    /* --grippers: how many, each its own interfaces */
     int udp_enabled;
     struct wsg_endpoint udp;     /* where the emulator listens */
     uint16_t udp_remote_port;    /* where replies go, at the sender's IP */
@@ -87,6 +93,11 @@ enum wsg_options_result {
 };
 
 void wsg_options_defaults(struct wsg_options *o);
+/* The options of gripper i of a fleet: o with its interfaces counted up
+ * (TCP and UDP ports, the pty path, the CAN ID pair, the serial number).
+ * The pty path is written to path. With one gripper: o itself. */
+void wsg_options_gripper(const struct wsg_options *o, unsigned i,
+                         struct wsg_options *out, char *path, size_t pathlen);
 /* Parse argv over the current contents of o (call wsg_options_defaults
  * first). Prints usage or a one-line "wsgemu: ..." error itself. */
 enum wsg_options_result wsg_options_parse(struct wsg_options *o, int argc,

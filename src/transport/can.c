@@ -327,14 +327,6 @@ static struct wsg_session *can_lookup(struct wsg_transport *t, uint32_t tag)
     return can->session.tag == tag ? &can->session : NULL;
 }
 
-static void can_each_session(struct wsg_transport *t, wsg_session_visit_fn fn,
-                             void *ctx)
-{
-    struct wsg_can *can = t->state;
-
-    fn(ctx, &can->session);
-}
-
 static int can_describe(const struct wsg_transport *t, char *buf, size_t len)
 {
     const struct wsg_can *can = t->state;
@@ -497,6 +489,5 @@ const struct wsg_transport_ops wsg_can_ops = {
     .handle = can_handle,
     .describe = can_describe,
     .lookup = can_lookup,
-    .each_session = can_each_session,
     .settle = NULL,
 };

@@ -55,7 +55,7 @@ struct wsg_pty {
     struct wsg_watch notify; /* inotify: IN_OPEN of the slave */
     struct wsg_loop *loop;
     struct wsg_device *dev;
-    const char *path; /* as given: the ready line shows it so */
+    char *path; /* as given: the ready line shows it so */
     int check_crc;
     int linked;       /* path is our symlink */
     int watching;     /* notify is in the epoll set */
@@ -318,14 +318,6 @@ static struct wsg_session *pty_lookup(struct wsg_transport *t, uint32_t tag)
 
 /* The session lives as long as the transport: its streams run on while the
  * port is closed, like a real gripper's on its serial line. */
-static void pty_each_session(struct wsg_transport *t, wsg_session_visit_fn fn,
-                             void *ctx)
-{
-    struct wsg_pty *pty = t->state;
-
-    fn(ctx, &pty->session);
-}
-
 static int pty_describe(const struct wsg_transport *t, char *buf, size_t len)
 {
     const struct wsg_pty *pty = t->state;
@@ -397,6 +389,7 @@ static void pty_free(struct wsg_pty *pty)
         close(pty->notify.fd);
     if (pty->master.fd >= 0)
         close(pty->master.fd);
+    free(pty->path);
     free(pty);
 }
 
@@ -455,8 +448,12 @@ static int pty_open(struct wsg_transport *t,
     pty->notify.owner = t;
     pty->loop = env->loop;
     pty->dev = env->dev;
-    pty->path = env->opt->pty_path;
     pty->check_crc = env->opt->check_crc;
+    pty->path = strdup(env->opt->pty_path);
+    if (!pty->path) {
+        r = -ENOMEM;
+        goto fail;
+    }
 
     step = "posix_openpt";
     pty->master.fd = posix_openpt(O_RDWR | O_NOCTTY | O_NONBLOCK | O_CLOEXEC);
@@ -523,6 +520,5 @@ const struct wsg_transport_ops wsg_pty_ops = {
     .handle = pty_handle,
     .describe = pty_describe,
     .lookup = pty_lookup,
-    .each_session = pty_each_session,
     .settle = pty_settle,
 };

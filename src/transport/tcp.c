@@ -377,23 +377,6 @@ static struct wsg_session *tcp_lookup(struct wsg_transport *t, uint32_t tag)
     return &c->session;
 }
 
-static void tcp_each_session(struct wsg_transport *t, wsg_session_visit_fn fn,
-                             void *ctx)
-{
-    struct wsg_tcp *tcp = t->state;
-    unsigned i, seen = 0;
-
-    for (i = 0; i < WSG_TCP_CONN_MAX && seen < tcp->nconns; i++) {
-        struct wsg_tcp_conn *c = tcp->slots[i];
-
-        if (!c)
-            continue;
-        seen++;
-        if (!c->dead)
-            fn(ctx, &c->session);
-    }
-}
-
 static void tcp_settle(struct wsg_transport *t)
 {
     struct wsg_tcp *tcp = t->state;
@@ -502,7 +485,6 @@ const struct wsg_transport_ops wsg_tcp_ops = {
     .handle = tcp_handle,
     .describe = tcp_describe,
     .lookup = tcp_lookup,
-    .each_session = tcp_each_session,
     .settle = tcp_settle,
     .drop_all = tcp_drop_all,
 };

@@ -1,9 +1,8 @@
 /*
- * What the daemon does with all transports at once: route a session tag to
- * the transport that issued it, visit every session (stream polling, the
- * idle check), finish deferred closes, build the ready line from the list
- * of open transports, and open the TCP listeners (the interface and the
- * control channel).
+ * What the daemon does with a gripper's transports at once: route a
+ * session tag to the transport that issued it and finish deferred closes;
+ * and what they share: the TCP listeners (the interface and the control
+ * channel), addresses and listen errors in messages.
  */
 #define _GNU_SOURCE
 
@@ -29,16 +28,6 @@ struct wsg_session *wsg_transport_lookup(struct wsg_transport *ts, size_t n,
     return t->ops->lookup ? t->ops->lookup(t, tag) : NULL;
 }
 
-void wsg_transport_each_session(struct wsg_transport *ts, size_t n,
-                                wsg_session_visit_fn fn, void *ctx)
-{
-    size_t i;
-
-    for (i = 0; i < n; i++)
-        if (ts[i].ops->each_session)
-            ts[i].ops->each_session(&ts[i], fn, ctx);
-}
-
 void wsg_transport_settle(struct wsg_transport *ts, size_t n)
 {
     size_t i;
@@ -46,30 +35,6 @@ void wsg_transport_settle(struct wsg_transport *ts, size_t n)
     for (i = 0; i < n; i++)
         if (ts[i].ops->settle)
             ts[i].ops->settle(&ts[i]);
-}
-
-int wsg_transport_ready_line(const struct wsg_transport *ts, size_t n,
-                             char *buf, size_t len)
-{
-    size_t used;
-    size_t i;
-    int r;
-
-    r = snprintf(buf, len, "ready");
-    if (r < 0 || (size_t)r >= len)
-        return -ENOSPC;
-    used = (size_t)r;
-    for (i = 0; i < n; i++) {
-        r = snprintf(buf + used, len - used, " %s=", ts[i].ops->name);
-        if (r < 0 || (size_t)r >= len - used)
-            return -ENOSPC;
-        used += (size_t)r;
-        r = ts[i].ops->describe(&ts[i], buf + used, len - used);
-        if (r < 0)
-            return r;
-        used += strlen(buf + used);
-    }
-    return 0;
 }
 
 void wsg_transport_listen_error(char *buf, size_t len, const char *proto,

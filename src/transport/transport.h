@@ -1,6 +1,6 @@
 /*
- * The interface every host interface of the emulator implements (TCP now;
- * UDP, pty and CAN later): an ops table plus a small generic record. A
+ * The interface every host interface of the emulator implements (TCP, UDP,
+ * pty, CAN, and the control channel): an ops table plus a small record. A
  * transport keeps all its state in its own struct behind t->state and
  * registers its descriptors with the loop through struct wsg_watch.
  *
@@ -24,15 +24,17 @@
 #define WSG_TAG_LOCAL_MASK      ((1u << WSG_TAG_TRANSPORT_SHIFT) - 1u)
 
 struct wsg_transport;
+struct wsg_gripper;
 
-/* What a transport gets from the daemon when it opens. */
+/* What a transport gets from the daemon when it opens. opt holds this
+ * gripper's own interface settings (a fleet counts them up per gripper)
+ * and lives only during open: keep copies, not pointers. */
 struct wsg_transport_env {
     struct wsg_loop *loop;
-    struct wsg_device *dev;
+    struct wsg_device *dev; /* NULL for the control channel */
     const struct wsg_options *opt;
+    struct wsg_gripper *gripper;
 };
-
-typedef void (*wsg_session_visit_fn)(void *ctx, struct wsg_session *s);
 
 struct wsg_transport_ops {
     const char *name; /* key on the ready line: "tcp" */
@@ -51,9 +53,6 @@ struct wsg_transport_ops {
     int (*describe)(const struct wsg_transport *t, char *buf, size_t len);
     /* Optional (NULL: no sessions). A live session by tag, else NULL. */
     struct wsg_session *(*lookup)(struct wsg_transport *t, uint32_t tag);
-    /* Optional. Visit every live session. */
-    void (*each_session)(struct wsg_transport *t, wsg_session_visit_fn fn,
-                         void *ctx);
     /* Optional. Between epoll batches: finish closing marked peers. */
     void (*settle)(struct wsg_transport *t);
     /* Optional (the control channel's drop). End every connection as if
@@ -67,6 +66,9 @@ struct wsg_transport {
     const struct wsg_transport_ops *ops;
     void *state;       /* the transport's own struct */
     uint32_t tag_base; /* (index + 1) << WSG_TAG_TRANSPORT_SHIFT */
+    /* Whose interface it is (NULL: the process's, the control channel):
+     * the loop brings that gripper's time up to date before its events. */
+    struct wsg_gripper *gripper;
 };
 
 extern const struct wsg_transport_ops wsg_tcp_ops;
@@ -102,12 +104,6 @@ void wsg_transport_listen_error(char *buf, size_t len, const char *proto,
 /* Route a tag to the transport that issued it. */
 struct wsg_session *wsg_transport_lookup(struct wsg_transport *ts, size_t n,
                                          uint32_t tag);
-void wsg_transport_each_session(struct wsg_transport *ts, size_t n,
-                                wsg_session_visit_fn fn, void *ctx);
 void wsg_transport_settle(struct wsg_transport *ts, size_t n);
-/* "ready tcp=127.0.0.1:41234 ...": the ready line without its newline.
- * Returns 0 or -ENOSPC. */
-int wsg_transport_ready_line(const struct wsg_transport *ts, size_t n,
-                             char *buf, size_t len);
 
 #endif

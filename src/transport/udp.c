@@ -56,7 +56,6 @@ struct wsg_udp {
     uint64_t send_drops; /* answers the socket would not take */
     char local[WSG_UDP_ADDR_LEN];
     struct wsg_udp_peer peers[WSG_UDP_PEERS];
-    uint8_t rx[65536]; /* the largest datagram */
 };
 
 /* The session's send callback: one packet, one datagram. UDP may lose
@@ -125,7 +124,7 @@ static void udp_handle(struct wsg_transport *t, struct wsg_watch *w,
         struct sockaddr_in from;
         socklen_t flen = sizeof from;
         struct wsg_udp_peer *p;
-        ssize_t n = recvfrom(udp->watch.fd, udp->rx, sizeof udp->rx,
+        ssize_t n = recvfrom(udp->watch.fd, udp->loop->rx, udp->loop->rxlen,
                              MSG_DONTWAIT, (struct sockaddr *)&from, &flen);
 
         if (n < 0) {
@@ -138,7 +137,7 @@ static void udp_handle(struct wsg_transport *t, struct wsg_watch *w,
         p = udp_peer(udp, &from);
         p->heard = ++udp->clock;
         wsg_device_input_datagram(udp->dev, &p->session, udp->check_crc,
-                                  udp->rx, (size_t)n);
+                                  udp->loop->rx, (size_t)n);
     }
 }
 
@@ -148,17 +147,6 @@ static struct wsg_session *udp_lookup(struct wsg_transport *t, uint32_t tag)
     struct wsg_udp_peer *p = &udp->peers[tag & WSG_UDP_PEER_MASK];
 
     return p->used && p->session.tag == tag ? &p->session : NULL;
-}
-
-static void udp_each_session(struct wsg_transport *t, wsg_session_visit_fn fn,
-                             void *ctx)
-{
-    struct wsg_udp *udp = t->state;
-    unsigned i;
-
-    for (i = 0; i < WSG_UDP_PEERS; i++)
-        if (udp->peers[i].used)
-            fn(ctx, &udp->peers[i].session);
 }
 
 static int udp_describe(const struct wsg_transport *t, char *buf, size_t len)
@@ -244,6 +232,5 @@ const struct wsg_transport_ops wsg_udp_ops = {
     .handle = udp_handle,
     .describe = udp_describe,
     .lookup = udp_lookup,
-    .each_session = udp_each_session,
     .settle = NULL,
 };
