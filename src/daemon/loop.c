@@ -31,6 +31,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/epoll.h>
+#include <sys/inotify.h>
 #include <sys/signalfd.h>
 #include <sys/timerfd.h>
 #include <time.h>
@@ -99,6 +100,7 @@ int wsg_loop_init(struct wsg_loop *l, uint32_t step_us)
     l->epfd = -1;
     l->timer.fd = -1;
     l->signal.fd = -1;
+    l->inotify.fd = -1;
     l->step_ns = (uint64_t)step_us * NS_PER_US;
     l->scale = 1.0;
     l->period_ns = l->step_ns;
@@ -149,6 +151,12 @@ fail_r:
 
 void wsg_loop_fini(struct wsg_loop *l)
 {
+    if (l->inotify.fd >= 0)
+        close(l->inotify.fd);
+    l->inotify.fd = -1;
+    free(l->fswatch);
+    l->fswatch = NULL;
+    l->nfswatch = 0;
     if (l->timer.fd >= 0)
         close(l->timer.fd);
     if (l->signal.fd >= 0)
@@ -160,6 +168,53 @@ void wsg_loop_fini(struct wsg_loop *l)
     l->epfd = -1;
     free(l->rx);
     l->rx = NULL;
+}
+
+int wsg_loop_fswatch_add(struct wsg_loop *l, const char *path, uint32_t mask,
+                         struct wsg_watch *w)
+{
+    int wd;
+    int r;
+
+    if (l->inotify.fd < 0) {
+        l->inotify.fd = inotify_init1(IN_NONBLOCK | IN_CLOEXEC);
+        if (l->inotify.fd < 0)
+            return -errno;
+        r = wsg_loop_watch_add(l, &l->inotify, EPOLLIN);
+        if (r < 0) {
+            close(l->inotify.fd);
+            l->inotify.fd = -1;
+            return r;
+        }
+    }
+    wd = inotify_add_watch(l->inotify.fd, path, mask);
+    if (wd < 0)
+        return -errno;
+    if ((size_t)wd >= l->nfswatch) {
+        size_t n = l->nfswatch ? l->nfswatch : 16;
+        struct wsg_watch **t;
+
+        while (n <= (size_t)wd)
+            n *= 2;
+        t = realloc(l->fswatch, n * sizeof *t);
+        if (!t) {
+            inotify_rm_watch(l->inotify.fd, wd);
+            return -ENOMEM;
+        }
+        memset(t + l->nfswatch, 0, (n - l->nfswatch) * sizeof *t);
+        l->fswatch = t;
+        l->nfswatch = n;
+    }
+    l->fswatch[wd] = w;
+    return wd;
+}
+
+void wsg_loop_fswatch_del(struct wsg_loop *l, int wd)
+{
+    if (wd < 0 || (size_t)wd >= l->nfswatch || !l->fswatch[wd])
+        return;
+    l->fswatch[wd] = NULL;
+    inotify_rm_watch(l->inotify.fd, wd);
 }
 
 void wsg_loop_set_grippers(struct wsg_loop *l, struct wsg_gripper *g, size_t n)
@@ -402,6 +457,52 @@ static void on_signal(struct wsg_loop *l)
             l->stop = 1;
 }
 
+/* One event to the transport that owns w, with its gripper's time
+ * brought up to the grid first and its work checked after: a motion it
+ * started is stepped from the next tick, even one in this batch. */
+static void dispatch(struct wsg_loop *l, struct wsg_watch *w, uint32_t events)
+{
+    struct wsg_gripper *g = w->owner->gripper;
+
+    if (g)
+        wsg_loop_touch(l, g);
+    w->owner->ops->handle(w->owner, w, events);
+    if (g)
+        wsg_loop_check(l, g);
+}
+
+static void on_inotify(struct wsg_loop *l)
+{
+    /* Aligned as inotify_event requires; the watches are on files, so the
+     * events carry no names. */
+    union {
+        struct inotify_event ev;
+        char bytes[4096];
+    } buf;
+
+    for (;;) {
+        ssize_t n = read(l->inotify.fd, &buf, sizeof buf);
+        size_t off = 0;
+
+        if (n < 0 && errno == EINTR)
+            continue;
+        if (n <= 0)
+            return;
+        while (off + sizeof buf.ev <= (size_t)n) {
+            struct inotify_event ev;
+            struct wsg_watch *w;
+
+            memcpy(&ev, buf.bytes + off, sizeof ev);
+            off += sizeof ev + ev.len;
+            if (ev.wd < 0 || (size_t)ev.wd >= l->nfswatch)
+                continue;
+            w = l->fswatch[ev.wd];
+            if (w && w->owner)
+                dispatch(l, w, EPOLLIN);
+        }
+    }
+}
+
 /* Closing a peer may FAST STOP a model, so the active list (and with it
  * the timer) is decided after the closes. */
 static void settle(struct wsg_loop *l)
@@ -438,19 +539,15 @@ int wsg_loop_run(struct wsg_loop *l)
             skip_idle(l, mono_ns());
         for (i = 0; i < n; i++) {
             struct wsg_watch *w = ev[i].data.ptr;
-            struct wsg_gripper *g = w->owner ? w->owner->gripper : NULL;
 
-            if (g)
-                wsg_loop_touch(l, g);
             if (w->owner)
-                w->owner->ops->handle(w->owner, w, ev[i].events);
+                dispatch(l, w, ev[i].events);
             else if (w == &l->timer)
                 on_timer(l);
             else if (w == &l->signal)
                 on_signal(l);
-            /* From the next tick, even one in this batch. */
-            if (g)
-                wsg_loop_check(l, g);
+            else if (w == &l->inotify)
+                on_inotify(l);
         }
         settle(l);
         r = update_timer(l);

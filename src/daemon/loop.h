@@ -45,6 +45,12 @@ struct wsg_loop {
     int epfd;
     struct wsg_watch timer;  /* timerfd */
     struct wsg_watch signal; /* signalfd */
+    /* One inotify instance for every file watch of the process (the
+     * kernel allows few instances per user, and a fleet has a pty each):
+     * fswatch[wd] is the watch an event of that descriptor goes to. */
+    struct wsg_watch inotify; /* fd -1 until the first file watch */
+    struct wsg_watch **fswatch;
+    size_t nfswatch;
     struct wsg_gripper *grippers;
     size_t ngrippers;
     /* Transports of the process, not of a gripper (the control channel). */
@@ -108,6 +114,12 @@ int wsg_loop_resume(struct wsg_loop *l);
 int wsg_loop_step(struct wsg_loop *l, uint64_t nsteps);
 /* Serve until SIGINT or SIGTERM: returns 0 then, -errno on failure. */
 int wsg_loop_run(struct wsg_loop *l);
+
+/* Watch path for the inotify events in mask: each delivers EPOLLIN to w's
+ * owner (w->fd is not used). Returns the watch descriptor or -errno. */
+int wsg_loop_fswatch_add(struct wsg_loop *l, const char *path, uint32_t mask,
+                         struct wsg_watch *w);
+void wsg_loop_fswatch_del(struct wsg_loop *l, int wd);
 
 int wsg_loop_watch_add(struct wsg_loop *l, struct wsg_watch *w,
                        uint32_t events);

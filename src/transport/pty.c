@@ -9,7 +9,8 @@
  * it is, the emulator sends nothing (its packets are lost, as on a real
  * line) and must not wake: after the last close of the slave the master
  * polls POLLHUP for good, so it leaves the epoll set and an inotify IN_OPEN
- * watch on the slave brings it back when a driver opens the port again. A
+ * watch on the slave (through the loop's one inotify instance, shared by a
+ * fleet's ptys) brings it back when a driver opens the port again. A
  * slave that was never opened shows no HUP, so the line starts out closed
  * and waiting for IN_OPEN too.
  *
@@ -52,13 +53,13 @@
 
 struct wsg_pty {
     struct wsg_watch master; /* the master side of the pseudo-terminal */
-    struct wsg_watch notify; /* inotify: IN_OPEN of the slave */
+    struct wsg_watch notify; /* the loop's file watch: IN_OPEN of the slave */
     struct wsg_loop *loop;
     struct wsg_device *dev;
     char *path; /* as given: the ready line shows it so */
     int check_crc;
     int linked;       /* path is our symlink */
-    int watching;     /* notify is in the epoll set */
+    int wd;           /* the file watch's descriptor; -1: none */
     int active;       /* master in the epoll set: the host has the port open */
     int hup;          /* the host closed it: settle takes the master out */
     uint32_t events;  /* as registered with epoll while active */
@@ -190,26 +191,6 @@ static int master_hung_up(const struct wsg_pty *pty)
     return r != 1 || (p.revents & (POLLHUP | POLLERR | POLLNVAL)) != 0;
 }
 
-static void drain_notify(struct wsg_pty *pty)
-{
-    /* Aligned as inotify_event requires; the events carry no name (the
-     * watch is on the file itself), but a full buffer costs nothing. */
-    union {
-        struct inotify_event ev;
-        char bytes[4096];
-    } buf;
-
-    for (;;) {
-        ssize_t n = read(pty->notify.fd, &buf, sizeof buf);
-
-        if (n > 0)
-            continue;
-        if (n < 0 && errno == EINTR)
-            continue;
-        return;
-    }
-}
-
 /* Throw away what the host did not read before it closed the port: the
  * terminal would hand it to the next opener, starting anywhere in a packet,
  * where a real port loses it. It waits in two places, both reachable from
@@ -272,7 +253,6 @@ static void hang_up(struct wsg_pty *pty)
 
 static void on_notify(struct wsg_pty *pty)
 {
-    drain_notify(pty);
     /* While active (or about to hang up, which checks again itself) an
      * open changes nothing. A spurious one while closed costs one HUP. */
     if (!pty->active && !pty->hup)
@@ -383,10 +363,7 @@ static void pty_free(struct wsg_pty *pty)
     unlink_ours(pty);
     if (pty->active)
         wsg_loop_watch_del(pty->loop, &pty->master);
-    if (pty->watching)
-        wsg_loop_watch_del(pty->loop, &pty->notify);
-    if (pty->notify.fd >= 0)
-        close(pty->notify.fd);
+    wsg_loop_fswatch_del(pty->loop, pty->wd);
     if (pty->master.fd >= 0)
         close(pty->master.fd);
     free(pty->path);
@@ -444,6 +421,7 @@ static int pty_open(struct wsg_transport *t,
     wsg_outq_init(&pty->out, 0);
     pty->master.fd = -1;
     pty->notify.fd = -1;
+    pty->wd = -1;
     pty->master.owner = t;
     pty->notify.owner = t;
     pty->loop = env->loop;
@@ -476,16 +454,10 @@ static int pty_open(struct wsg_transport *t,
     if (r < 0)
         goto fail;
     step = "inotify";
-    pty->notify.fd = inotify_init1(IN_NONBLOCK | IN_CLOEXEC);
-    if (pty->notify.fd < 0)
-        goto fail_errno;
-    if (inotify_add_watch(pty->notify.fd, pty->slave, IN_OPEN) < 0)
-        goto fail_errno;
-    step = "epoll";
-    r = wsg_loop_watch_add(pty->loop, &pty->notify, EPOLLIN);
+    r = wsg_loop_fswatch_add(pty->loop, pty->slave, IN_OPEN, &pty->notify);
     if (r < 0)
         goto fail;
-    pty->watching = 1;
+    pty->wd = r;
     wsg_parser_init(&pty->parser, pty->check_crc);
     wsg_session_init(&pty->session, t->tag_base | 1u, 0, pty_packet, pty);
     /* For the communication log. */
