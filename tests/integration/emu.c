@@ -614,10 +614,12 @@ const struct emu_transport *const emu_transports[] = {
 
 /* ---- clients ---- */
 
-int emu_open(struct emu_client *c, struct emu *e,
-             const struct emu_transport *tp)
+int emu_open_nth(struct emu_client *c, struct emu *e,
+                 const struct emu_transport *tp, unsigned n)
 {
-    char addr[256];
+    char addr[1024];
+    char *p, *comma;
+
     memset(c, 0, sizeof(*c));
     c->fd = -1;
     c->fd2 = -1;
@@ -630,7 +632,26 @@ int emu_open(struct emu_client *c, struct emu *e,
                 e->line);
         return -1;
     }
-    return tp->open(c, addr);
+    /* A fleet lists one value per gripper, comma-separated. */
+    for (p = addr; n > 0; n--) {
+        p = strchr(p, ',');
+        if (!p) {
+            fprintf(stderr, "emu: %s= has too few values in \"%s\"\n",
+                    tp->field, e->line);
+            return -1;
+        }
+        p++;
+    }
+    comma = strchr(p, ',');
+    if (comma)
+        *comma = '\0';
+    return tp->open(c, p);
+}
+
+int emu_open(struct emu_client *c, struct emu *e,
+             const struct emu_transport *tp)
+{
+    return emu_open_nth(c, e, tp, 0);
 }
 
 void emu_close(struct emu_client *c)

@@ -44,7 +44,7 @@ struct emu {
     uint16_t tp_port;    /* e.g. UDP: where replies come back */
     unsigned tp_clients; /* clients opened so far */
     int out_fd;          /* read end of the daemon's stdout */
-    char line[1024];     /* the ready line, without its newline */
+    char line[2048];     /* the ready line, without its newline */
     /* stdout after the ready line: what arrived with it, and at stop */
     char extra[1024];
     size_t extra_len;
@@ -161,6 +161,10 @@ struct emu_client {
  * if the field is absent or the connection fails. */
 int emu_open(struct emu_client *c, struct emu *e,
              const struct emu_transport *tp);
+/* The same to gripper n of a fleet (--grippers): the n-th of the field's
+ * comma-separated values. */
+int emu_open_nth(struct emu_client *c, struct emu *e,
+                 const struct emu_transport *tp, unsigned n);
 void emu_close(struct emu_client *c);
 void emu_abort(struct emu_client *c);
 

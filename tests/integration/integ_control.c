@@ -21,6 +21,7 @@
  */
 #include "check.h"
 #include "emu.h"
+#include "emu_ctl.h"
 #include "wsg/axis.h"
 
 #include <arpa/inet.h>
@@ -35,137 +36,9 @@
 static const char *const args[] = {"--tcp", "127.0.0.1:0", "--control",
                                    "127.0.0.1:0", NULL};
 
-/* ---- a control client: lines over TCP ---- */
-
-struct ctl {
-    int fd;
-    char buf[8192];
-    size_t len;
-};
-
-static int ctl_open(struct ctl *c, const struct emu *e)
-{
-    char v[64];
-    struct sockaddr_in sa;
-    const char *colon;
-
-    c->len = 0;
-    c->fd = -1;
-    if (!emu_field(e, "control", v, sizeof v))
-        return -1;
-    colon = strrchr(v, ':');
-    if (!colon)
-        return -1;
-    memset(&sa, 0, sizeof sa);
-    sa.sin_family = AF_INET;
-    sa.sin_port = htons((uint16_t)atoi(colon + 1));
-    sa.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-    c->fd = socket(AF_INET, SOCK_STREAM, 0);
-    if (c->fd < 0)
-        return -1;
-    if (connect(c->fd, (struct sockaddr *)&sa, sizeof sa) < 0) {
-        close(c->fd);
-        c->fd = -1;
-        return -1;
-    }
-    return 0;
-}
-
-static void ctl_close(struct ctl *c)
-{
-    if (c->fd >= 0)
-        close(c->fd);
-    c->fd = -1;
-}
-
-static int ctl_write(struct ctl *c, const char *s)
-{
-    size_t n = strlen(s);
-
-    return send(c->fd, s, n, MSG_NOSIGNAL) == (ssize_t)n ? 0 : -1;
-}
-
-/* The next line (without its newline) into out; 0, or -1 on timeout or
- * end of stream. */
-static int ctl_line(struct ctl *c, char *out, size_t cap)
-{
-    double end = emu_now_ms() + EMU_REPLY_MS;
-
-    for (;;) {
-        char *nl = memchr(c->buf, '\n', c->len);
-
-        if (nl) {
-            size_t n = (size_t)(nl - c->buf);
-            size_t k = n < cap - 1 ? n : cap - 1;
-
-            memcpy(out, c->buf, k);
-            out[k] = '\0';
-            memmove(c->buf, nl + 1, c->len - n - 1);
-            c->len -= n + 1;
-            return 0;
-        }
-        double left = end - emu_now_ms();
-        if (left <= 0 || c->len == sizeof c->buf)
-            return -1;
-        struct pollfd p = {.fd = c->fd, .events = POLLIN};
-        if (poll(&p, 1, (int)left + 1) <= 0)
-            continue;
-        ssize_t r = recv(c->fd, c->buf + c->len, sizeof c->buf - c->len, 0);
-        if (r <= 0)
-            return -1;
-        c->len += (size_t)r;
-    }
-}
-
-/* Send one command line and read its answer. */
-static const char *ctl_cmd(struct ctl *c, const char *cmd)
-{
-    static char line[4096]; /* the test is single-threaded */
-    char out[512];
-
-    snprintf(out, sizeof out, "%s\n", cmd);
-    if (ctl_write(c, out) < 0 || ctl_line(c, line, sizeof line) < 0)
-        return "(no answer)";
-    return line;
-}
-
-static int is_ok(const char *ans)
-{
-    return strncmp(ans, "ok", 2) == 0 && (ans[2] == '\0' || ans[2] == ' ');
-}
-
-#define CMD_OK(c, cmd)                                                        \
-    do {                                                                      \
-        const char *ans_ = ctl_cmd((c), (cmd));                               \
-        if (!is_ok(ans_))                                                     \
-            fprintf(stderr, "%s -> %s\n", (cmd), ans_);                       \
-        CHECK(is_ok(ans_));                                                   \
-    } while (0)
-
-/* "ok S.FFFFFF" -> microseconds, exactly; -1 if it is not that. */
-static long long time_us(const char *ans)
-{
-    char *end;
-    long long s, f = 0;
-    int digits = 0;
-
-    if (strncmp(ans, "ok ", 3) != 0)
-        return -1;
-    s = strtoll(ans + 3, &end, 10);
-    if (*end == '.') {
-        for (end++; *end >= '0' && *end <= '9'; end++, digits++)
-            f = f * 10 + (*end - '0');
-    }
-    if (*end != '\0' || digits > 6)
-        return -1;
-    while (digits++ < 6)
-        f *= 10;
-    return s * 1000000 + f;
-}
-
 static long long ctl_time(struct ctl *c)
 {
-    return time_us(ctl_cmd(c, "time"));
+    return ctl_time_us(ctl_cmd(c, "time"));
 }
 
 /* ---- a minimal JSON checker: the grammar, nothing more ---- */
@@ -284,16 +157,6 @@ static int json_valid_object(const char *p)
 }
 
 /* The number after "key": in a flat search (keys are unique in state). */
-static double json_num(const char *json, const char *key)
-{
-    char pat[64];
-    const char *p;
-
-    snprintf(pat, sizeof pat, "\"%s\":", key);
-    p = strstr(json, pat);
-    return p ? strtod(p + strlen(pat), NULL) : -1e9;
-}
-
 /* The state's JSON, after "ok ". */
 static const char *ctl_state(struct ctl *c)
 {
@@ -366,9 +229,9 @@ static void test_ready_and_state(struct emu *e, struct ctl *k)
             fprintf(stderr, "state lacks %s: %s\n", keys[i], js);
         CHECK(strstr(js, keys[i]) != NULL);
     }
-    CHECK_NEAR(json_num(js, "width"), 55.0, 1e-6);
-    CHECK_EQ(json_num(js, "flags"), 0);
-    CHECK_EQ(json_num(js, "grasp_state"), 0);
+    CHECK_NEAR(ctl_json_num(js, "width"), 55.0, 1e-6);
+    CHECK_EQ(ctl_json_num(js, "flags"), 0);
+    CHECK_EQ(ctl_json_num(js, "grasp_state"), 0);
 }
 
 static void test_errors(struct ctl *k)
@@ -392,7 +255,7 @@ static void test_errors(struct ctl *k)
     memset(big, 'x', sizeof big - 1);
     big[sizeof big - 1] = '\0';
     CHECK(strncmp(ctl_cmd(k, big), "error ", 6) == 0);
-    CHECK(is_ok(ctl_cmd(k, "time")));
+    CHECK(ctl_is_ok(ctl_cmd(k, "time")));
 
     /* Several lines in one write, answered in order; an empty line and
      * CRLF line ends are fine. */
@@ -421,17 +284,17 @@ static void test_lockstep(struct emu_client *c, struct ctl *k)
     REQUIRE(emu_request(c, WSG_CMD_HOMING, &dir, 1, NULL, EMU_REPLY_MS) ==
             WSG_E_CMD_PENDING);
     for (int i = 0; i < 8; i++) {
-        CHECK_EQ(time_us(ctl_cmd(k, "time step 100")),
+        CHECK_EQ(ctl_time_us(ctl_cmd(k, "time step 100")),
                  t0 + (i + 1) * 100000LL);
         /* The steps ran before the answer: a result would be here. */
         CHECK_EQ(emu_recv_id(c, WSG_CMD_HOMING, &f, 30), 0);
     }
     CHECK(flags_of(c) & WSG_SF_MOVING);
-    CHECK_EQ(time_us(ctl_cmd(k, "time step 100")), t0 + 900000LL);
+    CHECK_EQ(ctl_time_us(ctl_cmd(k, "time step 100")), t0 + 900000LL);
     CHECK_EQ(emu_recv_id(c, WSG_CMD_HOMING, &f, EMU_REPLY_MS), 1);
     CHECK_EQ(f.status, WSG_E_SUCCESS);
     CHECK_EQ(ctl_time(k), t0 + 900000LL);
-    CHECK_NEAR(json_num(ctl_state(k), "width"), 110.0, 1e-3);
+    CHECK_NEAR(ctl_json_num(ctl_state(k), "width"), 110.0, 1e-3);
     CHECK(strstr(ctl_state(k), "\"paused\":true") != NULL);
 
     /* A new scale while paused waits for the resume. */
@@ -487,8 +350,8 @@ static void test_part_lost(struct emu_client *c, struct ctl *k)
     CHECK_EQ(q[0] | q[1] << 8 | q[2] << 16 | (uint32_t)q[3] << 24, 1);
     CHECK_EQ(q[6] | q[7] << 8, 1); /* lost */
     const char *js = ctl_state(k);
-    CHECK_EQ(json_num(js, "grasp_state"), WSG_GS_PART_LOST);
-    CHECK_EQ(json_num(js, "lost_part"), 1);
+    CHECK_EQ(ctl_json_num(js, "grasp_state"), WSG_GS_PART_LOST);
+    CHECK_EQ(ctl_json_num(js, "lost_part"), 1);
     CHECK(strstr(js, "\"part_lost\"") != NULL);
     /* The fingers snap on through where the part was; let them settle. */
     CHECK(emu_wait_flags(c, WSG_SF_MOVING, 0, 5000, NULL) == 0);
@@ -500,7 +363,7 @@ static void test_faults(struct emu_client *c, struct ctl *k)
 
     CMD_OK(k, "fault temp-fault on");
     CHECK(flags_of(c) & (1u << 14));
-    CHECK(json_num(ctl_state(k), "flags") >= (double)(1u << 14));
+    CHECK(ctl_json_num(ctl_state(k), "flags") >= (double)(1u << 14));
     CHECK_EQ(emu_request(c, WSG_CMD_HOMING, &dir, 1, NULL, EMU_REPLY_MS),
              WSG_E_ACCESS_DENIED);
     CMD_OK(k, "fault temp-fault off");
@@ -607,7 +470,7 @@ static void test_reset(struct emu *e, struct ctl *k)
 
     CMD_OK(k, "reset");
     CHECK_EQ(flags_of(&m) & WSG_SF_REFERENCED, 0);
-    CHECK_EQ(json_num(ctl_state(k), "flags"), 0);
+    CHECK_EQ(ctl_json_num(ctl_state(k), "flags"), 0);
     CHECK(emu_get_float(&m, WSG_CMD_GET_ACCELERATION, &acc) == 0);
     CHECK_NEAR(acc, 150.0, 0.01);
     /* The stream ended with the power cycle. */
@@ -632,7 +495,7 @@ int main(int argc, char **argv)
     test_ready_and_state(&e, &k);
     /* A second control client at once. */
     REQUIRE(ctl_open(&k2, &e) == 0);
-    CHECK(is_ok(ctl_cmd(&k2, "time")));
+    CHECK(ctl_is_ok(ctl_cmd(&k2, "time")));
     test_errors(&k2);
     ctl_close(&k2);
 

@@ -1,0 +1,136 @@
+/*
+ * The control channel's client for the integration tests: one command
+ * line out, one answer line back, every wait bounded by EMU_REPLY_MS.
+ */
+#include "emu_ctl.h"
+
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <poll.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+int ctl_open(struct ctl *c, const struct emu *e)
+{
+    char v[64];
+    struct sockaddr_in sa;
+    const char *colon;
+
+    c->len = 0;
+    c->fd = -1;
+    if (!emu_field(e, "control", v, sizeof v))
+        return -1;
+    colon = strrchr(v, ':');
+    if (!colon)
+        return -1;
+    memset(&sa, 0, sizeof sa);
+    sa.sin_family = AF_INET;
+    sa.sin_port = htons((uint16_t)atoi(colon + 1));
+    sa.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    c->fd = socket(AF_INET, SOCK_STREAM, 0);
+    if (c->fd < 0)
+        return -1;
+    if (connect(c->fd, (struct sockaddr *)&sa, sizeof sa) < 0) {
+        close(c->fd);
+        c->fd = -1;
+        return -1;
+    }
+    return 0;
+}
+
+void ctl_close(struct ctl *c)
+{
+    if (c->fd >= 0)
+        close(c->fd);
+    c->fd = -1;
+}
+
+int ctl_write(struct ctl *c, const char *s)
+{
+    size_t n = strlen(s);
+
+    return send(c->fd, s, n, MSG_NOSIGNAL) == (ssize_t)n ? 0 : -1;
+}
+
+/* The next line (without its newline) into out; 0, or -1 on timeout or
+ * end of stream. */
+int ctl_line(struct ctl *c, char *out, size_t cap)
+{
+    double end = emu_now_ms() + EMU_REPLY_MS;
+
+    for (;;) {
+        char *nl = memchr(c->buf, '\n', c->len);
+
+        if (nl) {
+            size_t n = (size_t)(nl - c->buf);
+            size_t k = n < cap - 1 ? n : cap - 1;
+
+            memcpy(out, c->buf, k);
+            out[k] = '\0';
+            memmove(c->buf, nl + 1, c->len - n - 1);
+            c->len -= n + 1;
+            return 0;
+        }
+        double left = end - emu_now_ms();
+        if (left <= 0 || c->len == sizeof c->buf)
+            return -1;
+        struct pollfd p = {.fd = c->fd, .events = POLLIN};
+        if (poll(&p, 1, (int)left + 1) <= 0)
+            continue;
+        ssize_t r = recv(c->fd, c->buf + c->len, sizeof c->buf - c->len, 0);
+        if (r <= 0)
+            return -1;
+        c->len += (size_t)r;
+    }
+}
+
+/* Send one command line and read its answer. */
+const char *ctl_cmd(struct ctl *c, const char *cmd)
+{
+    static char line[4096]; /* the test is single-threaded */
+    char out[512];
+
+    snprintf(out, sizeof out, "%s\n", cmd);
+    if (ctl_write(c, out) < 0 || ctl_line(c, line, sizeof line) < 0)
+        return "(no answer)";
+    return line;
+}
+
+int ctl_is_ok(const char *ans)
+{
+    return strncmp(ans, "ok", 2) == 0 && (ans[2] == '\0' || ans[2] == ' ');
+}
+
+/* "ok S.FFFFFF" -> microseconds, exactly; -1 if it is not that. */
+long long ctl_time_us(const char *ans)
+{
+    char *end;
+    long long s, f = 0;
+    int digits = 0;
+
+    if (strncmp(ans, "ok ", 3) != 0)
+        return -1;
+    s = strtoll(ans + 3, &end, 10);
+    if (*end == '.') {
+        for (end++; *end >= '0' && *end <= '9'; end++, digits++)
+            f = f * 10 + (*end - '0');
+    }
+    if (*end != '\0' || digits > 6)
+        return -1;
+    while (digits++ < 6)
+        f *= 10;
+    return s * 1000000 + f;
+}
+
+double ctl_json_num(const char *json, const char *key)
+{
+    char pat[64];
+    const char *p;
+
+    snprintf(pat, sizeof pat, "\"%s\":", key);
+    p = strstr(json, pat);
+    return p ? strtod(p + strlen(pat), NULL) : -1e9;
+}
