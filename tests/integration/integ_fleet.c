@@ -224,10 +224,16 @@ int main(int argc, char **argv)
     CHECK(strncmp(ctl_cmd(&k, "gripper 3"), "error ", 6) == 0);
     CHECK(strcmp(ctl_cmd(&k, "gripper 1"), "ok gripper 1 of 3") == 0);
     CMD_OK(&k, "fault power on");
+    /* A power fault is a FAST STOP, with the next step of that gripper. */
+    CHECK(emu_wait_flags(&c[1], WSG_SF_FAST_STOP, WSG_SF_FAST_STOP,
+                         EMU_REPLY_MS, NULL) == 0);
     CHECK(flags_of(&c[1]) & WSG_SF_POWER_FAULT);
-    CHECK(!(flags_of(&c[0]) & WSG_SF_POWER_FAULT));
-    CHECK(!(flags_of(&c[2]) & WSG_SF_POWER_FAULT));
+    CHECK(!(flags_of(&c[0]) & (WSG_SF_POWER_FAULT | WSG_SF_FAST_STOP)));
+    CHECK(!(flags_of(&c[2]) & (WSG_SF_POWER_FAULT | WSG_SF_FAST_STOP)));
     CMD_OK(&k, "fault power off");
+    CHECK_EQ(emu_request(&c[1], WSG_CMD_ACK_FAST_STOP, "ack", 3, NULL,
+                         EMU_REPLY_MS),
+             WSG_E_SUCCESS);
     CMD_OK(&k, "gripper 2");
     CHECK(ctl_json_num(ctl_cmd(&k, "state"), "width") > 109.0);
     CMD_OK(&k, "gripper 0");
