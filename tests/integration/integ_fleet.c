@@ -11,6 +11,8 @@
  *   one only; "stats" counts the grippers and the active ones.
  * - Counting past the end of the port or CAN ID ranges, and UDP ranges
  *   that would overlap, are refused with exit status 2.
+ * With the transport argument "can" (the CAN runner), the same fleet on a
+ * CAN bus instead: an ID pair per gripper, each answering on its own.
  */
 #define _GNU_SOURCE /* mkdtemp */
 
@@ -151,9 +153,65 @@ out:
     return ok;
 }
 
+static int run_local(const char *exe);
+
+/* Three grippers on one bus: commands on ID, ID + 2, ID + 4. */
+static void test_can(const char *exe)
+{
+    static const char *const extra[] = {"--grippers", "3", NULL};
+    struct emu e;
+    struct emu_client c[N];
+    struct emu_frame f;
+    char v[256], want[256];
+    unsigned long id;
+    uint8_t dir = WSG_HOME_POSITIVE;
+    unsigned i;
+
+    REQUIRE(emu_start_tp(&e, exe, &emu_can, extra) == 0);
+    printf("%s\n", e.line);
+    REQUIRE(emu_field(&e, "can", v, sizeof v));
+    {
+        const char *colon = strchr(v, ':');
+
+        REQUIRE(colon != NULL);
+        id = strtoul(colon + 1, NULL, 16);
+        snprintf(want, sizeof want, "%.*s:0x%03lX,%.*s:0x%03lX,%.*s:0x%03lX",
+                 (int)(colon - v), v, id, (int)(colon - v), v, id + 2,
+                 (int)(colon - v), v, id + 4);
+        CHECK(strcmp(v, want) == 0);
+    }
+    for (i = 0; i < N; i++) {
+        REQUIRE(emu_open_nth(&c[i], &e, &emu_can, i) == 0);
+        CHECK_EQ(serial_of(&c[i]), 1u + i);
+    }
+    CHECK_EQ(emu_request(&c[1], WSG_CMD_HOMING, &dir, 1, NULL, EMU_REPLY_MS),
+             WSG_E_CMD_PENDING);
+    CHECK_EQ(emu_recv_id(&c[1], WSG_CMD_HOMING, &f, 10000), 1);
+    CHECK_EQ(f.status, WSG_E_SUCCESS);
+    CHECK(flags_of(&c[1]) & WSG_SF_REFERENCED);
+    CHECK(!(flags_of(&c[0]) & WSG_SF_REFERENCED));
+    CHECK(!(flags_of(&c[2]) & WSG_SF_REFERENCED));
+    /* Only gripper 1's client saw a homing result. */
+    CHECK_EQ(c[0].seen[WSG_CMD_HOMING], 0u);
+    CHECK_EQ(c[2].seen[WSG_CMD_HOMING], 0u);
+    for (i = 0; i < N; i++)
+        emu_close(&c[i]);
+    CHECK_EQ(emu_stop(&e), 0);
+}
+
 int main(int argc, char **argv)
 {
     const char *exe = emu_exe(argc, argv);
+
+    if (argc > 2 && emu_transport_arg(argc, argv) == &emu_can) {
+        test_can(exe);
+        TEST_EXIT();
+    }
+    return run_local(exe);
+}
+
+static int run_local(const char *exe)
+{
     char ptydir[] = "/tmp/wsgemu-fleet-XXXXXX";
     char want[512], v[1024];
     struct emu e;
