@@ -4,6 +4,7 @@
  * unknown command 90h, Get Acceleration's 150.0 mm/s^2, and the pending and
  * final answers of a Preposition.
  */
+#include "manual_packets.h"
 #include "tdev.h"
 
 static void check_bytes(const struct tdev_pkt *p, const uint8_t *want,
@@ -15,16 +16,8 @@ static void check_bytes(const struct tdev_pkt *p, const uint8_t *want,
 
 int main(void)
 {
-    static const uint8_t homing_ok[] = {0xAA, 0xAA, 0xAA, 0x20, 0x02,
-                                        0x00, 0x00, 0x00, 0xB3, 0xFD};
-    static const uint8_t unknown[] = {0xAA, 0xAA, 0xAA, 0x90, 0x02,
-                                      0x00, 0x0E, 0x00, 0xFD, 0x02};
     static const uint8_t cmd_unknown[] = {0xAA, 0xAA, 0xAA, 0x90,
                                           0x00, 0x00, 0x00, 0x00};
-    static const uint8_t pending[] = {0xAA, 0xAA, 0xAA, 0x21, 0x02,
-                                      0x00, 0x1A, 0x00, 0x67, 0xCB};
-    static const uint8_t final_ok[] = {0xAA, 0xAA, 0xAA, 0x21, 0x02,
-                                       0x00, 0x00, 0x00, 0x28, 0x04};
     struct tdev t;
     uint8_t dir = 0, pkt[WSG_FRAME_MAX], acc[4];
     size_t n;
@@ -34,7 +27,7 @@ int main(void)
     /* 1.2 example 1: Homing acknowledged, after its E_CMD_PENDING. */
     CHECK_EQ(tdev_cmd(&t, WSG_CMD_HOMING, &dir, 1), WSG_E_CMD_PENDING);
     CHECK(tdev_run_until(&t, 0, WSG_CMD_HOMING, 4000) > 0);
-    check_bytes(tdev_last(&t), homing_ok, sizeof homing_ok);
+    check_bytes(tdev_last(&t), MP(MP_HOMING_OK), MP_LEN(MP_HOMING_OK));
 
     /* 1.2 example 2: unknown command 90h; the checksum of the request does
      * not matter here, so send it with a valid one. */
@@ -43,7 +36,7 @@ int main(void)
     tdev_clear(&t);
     tdev_feed(&t, 0, pkt, n);
     REQUIRE(t.sess[0].n == 1);
-    check_bytes(tdev_last(&t), unknown, sizeof unknown);
+    check_bytes(tdev_last(&t), MP(MP_UNKNOWN), MP_LEN(MP_UNKNOWN));
 
     /* 1.2 example 3 (with the ID erratum of NOTES.md: 31h): 150.0 mm/s^2
      * is the default acceleration. */
@@ -55,8 +48,8 @@ int main(void)
 
     /* 1.3: a Preposition answered E_CMD_PENDING, then E_SUCCESS. */
     CHECK_EQ(tdev_move(&t, 0, 50.0f, 100.0f), WSG_E_CMD_PENDING);
-    check_bytes(tdev_last(&t), pending, sizeof pending);
+    check_bytes(tdev_last(&t), MP(MP_PENDING), MP_LEN(MP_PENDING));
     CHECK(tdev_run_until(&t, 0, WSG_CMD_PREPOSITION, 4000) > 0);
-    check_bytes(tdev_last(&t), final_ok, sizeof final_ok);
+    check_bytes(tdev_last(&t), MP(MP_FINAL), MP_LEN(MP_FINAL));
     TEST_EXIT();
 }

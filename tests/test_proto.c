@@ -6,46 +6,21 @@
 #include <string.h>
 
 #include "check.h"
+#include "manual_packets.h"
 #include "wsg/proto.h"
 
-/* All seven example packets of chapter 1, byte for byte. The Get
- * Acceleration example lost one 00h in the manual's text (SIZE says 6, five
- * bytes are printed); its checksum DCCBh is right for the packet with it. */
-static const uint8_t ex1[] = {0xAA, 0xAA, 0xAA, 0x01, 0x00, 0x00, 0xE8, 0x10};
-static const uint8_t ex2[] = {0xAA, 0xAA, 0xAA, 0x01, 0x02,
-                              0x00, 0x12, 0x34, 0x6D, 0x66};
-static const uint8_t ex_homing[] = {0xAA, 0xAA, 0xAA, 0x20, 0x02,
-                                    0x00, 0x00, 0x00, 0xB3, 0xFD};
-static const uint8_t ex_unknown[] = {0xAA, 0xAA, 0xAA, 0x90, 0x02,
-                                     0x00, 0x0E, 0x00, 0xFD, 0x02};
-static const uint8_t ex_getacc[] = {0xAA, 0xAA, 0xAA, 0x30, 0x06, 0x00, 0x00,
-                                    0x00, 0x00, 0x00, 0x16, 0x43, 0xDC, 0xCB};
-static const uint8_t ex_pending[] = {0xAA, 0xAA, 0xAA, 0x21, 0x02,
-                                     0x00, 0x1A, 0x00, 0x67, 0xCB};
-static const uint8_t ex_final[] = {0xAA, 0xAA, 0xAA, 0x21, 0x02,
-                                   0x00, 0x00, 0x00, 0x28, 0x04};
-
+/* All seven example packets of chapter 1, byte for byte. */
 static void test_crc_examples(void)
 {
-    const struct {
-        const uint8_t *p;
-        size_t n;
-    } ex[] = {{ex1, sizeof ex1},
-              {ex2, sizeof ex2},
-              {ex_homing, sizeof ex_homing},
-              {ex_unknown, sizeof ex_unknown},
-              {ex_getacc, sizeof ex_getacc},
-              {ex_pending, sizeof ex_pending},
-              {ex_final, sizeof ex_final}};
-    size_t i;
+    int i;
 
-    for (i = 0; i < sizeof ex / sizeof ex[0]; i++) {
-        uint16_t crc = wsg_crc_update(WSG_CRC_INIT, ex[i].p, ex[i].n - 2);
-        CHECK_EQ(crc, wsg_get_u16(ex[i].p + ex[i].n - 2));
+    for (i = 0; i < MP_COUNT; i++) {
+        uint16_t crc = wsg_crc_update(WSG_CRC_INIT, MP(i), MP_LEN(i) - 2);
+        CHECK_EQ(crc, wsg_get_u16(MP(i) + MP_LEN(i) - 2));
         /* Over the whole packet including its checksum: 0 (ch. 1.1). */
-        CHECK_EQ(wsg_crc_update(WSG_CRC_INIT, ex[i].p, ex[i].n), 0);
+        CHECK_EQ(wsg_crc_update(WSG_CRC_INIT, MP(i), MP_LEN(i)), 0);
     }
-    CHECK_EQ(wsg_crc_update(WSG_CRC_INIT, ex2, 8), 0x666D);
+    CHECK_EQ(wsg_crc_update(WSG_CRC_INIT, MP(MP_LOOP_1234), 8), 0x666D);
 }
 
 /* The table against the bitwise definition of the polynomial. */
@@ -69,17 +44,19 @@ static void test_encode(void)
     uint8_t out[64], payload[2] = {0x12, 0x34};
     uint8_t acc[4];
 
-    CHECK_EQ(wsg_frame_encode(out, sizeof out, 0x01, NULL, 0), sizeof ex1);
-    CHECK(memcmp(out, ex1, sizeof ex1) == 0);
-    CHECK_EQ(wsg_frame_encode(out, sizeof out, 0x01, payload, 2), sizeof ex2);
-    CHECK(memcmp(out, ex2, sizeof ex2) == 0);
+    CHECK_EQ(wsg_frame_encode(out, sizeof out, 0x01, NULL, 0),
+             MP_LEN(MP_LOOP_EMPTY));
+    CHECK(memcmp(out, MP(MP_LOOP_EMPTY), MP_LEN(MP_LOOP_EMPTY)) == 0);
+    CHECK_EQ(wsg_frame_encode(out, sizeof out, 0x01, payload, 2),
+             MP_LEN(MP_LOOP_1234));
+    CHECK(memcmp(out, MP(MP_LOOP_1234), MP_LEN(MP_LOOP_1234)) == 0);
     CHECK_EQ(wsg_frame_encode_reply(out, sizeof out, 0x20, 0, NULL, 0),
-             sizeof ex_homing);
-    CHECK(memcmp(out, ex_homing, sizeof ex_homing) == 0);
+             MP_LEN(MP_HOMING_OK));
+    CHECK(memcmp(out, MP(MP_HOMING_OK), MP_LEN(MP_HOMING_OK)) == 0);
     wsg_put_f32(acc, 150.0f);
     CHECK_EQ(wsg_frame_encode_reply(out, sizeof out, 0x30, 0, acc, 4),
-             sizeof ex_getacc);
-    CHECK(memcmp(out, ex_getacc, sizeof ex_getacc) == 0);
+             MP_LEN(MP_GET_ACC));
+    CHECK(memcmp(out, MP(MP_GET_ACC), MP_LEN(MP_GET_ACC)) == 0);
     /* Too small a buffer: nothing written, 0 returned. */
     CHECK_EQ(wsg_frame_encode(out, 9, 0x01, payload, 2), 0);
     CHECK_EQ(wsg_get_f32(acc), 150.0f);
@@ -136,14 +113,14 @@ static void test_parser_splits(void)
     /* garbage, two frames back to back, garbage ending in AAh, a frame */
     memcpy(stream + len, "\x01\x02\xAA\x55", 4);
     len += 4;
-    memcpy(stream + len, ex2, sizeof ex2);
-    len += sizeof ex2;
-    memcpy(stream + len, ex1, sizeof ex1);
-    len += sizeof ex1;
+    memcpy(stream + len, MP(MP_LOOP_1234), MP_LEN(MP_LOOP_1234));
+    len += MP_LEN(MP_LOOP_1234);
+    memcpy(stream + len, MP(MP_LOOP_EMPTY), MP_LEN(MP_LOOP_EMPTY));
+    len += MP_LEN(MP_LOOP_EMPTY);
     memcpy(stream + len, "\xAA\xAA\x00\xAA", 4);
     len += 4;
-    memcpy(stream + len, ex_getacc, sizeof ex_getacc);
-    len += sizeof ex_getacc;
+    memcpy(stream + len, MP(MP_GET_ACC), MP_LEN(MP_GET_ACC));
+    len += MP_LEN(MP_GET_ACC);
 
     wsg_parser_init(&p, 1);
     feed_chunked(&p, stream, len, len, &ref);
@@ -173,12 +150,14 @@ static void test_parser_bad_crc(void)
     struct events e;
     struct wsg_parser p;
 
-    memcpy(stream, ex2, sizeof ex2);
-    stream[sizeof ex2 - 1] ^= 0xFF; /* break the checksum */
-    memcpy(stream + sizeof ex2, ex1, sizeof ex1);
+    memcpy(stream, MP(MP_LOOP_1234), MP_LEN(MP_LOOP_1234));
+    stream[MP_LEN(MP_LOOP_1234) - 1] ^= 0xFF; /* break the checksum */
+    memcpy(stream + MP_LEN(MP_LOOP_1234), MP(MP_LOOP_EMPTY),
+           MP_LEN(MP_LOOP_EMPTY));
 
     wsg_parser_init(&p, 1);
-    feed_chunked(&p, stream, sizeof ex2 + sizeof ex1, 3, &e);
+    feed_chunked(&p, stream, MP_LEN(MP_LOOP_1234) + MP_LEN(MP_LOOP_EMPTY), 3,
+                 &e);
     REQUIRE(e.n == 2);
     CHECK_EQ(e.ev[0], WSG_PARSE_BAD_CRC);
     CHECK_EQ(e.id[0], 0x01);            /* answered under the received ID */
@@ -186,7 +165,7 @@ static void test_parser_bad_crc(void)
 
     /* Checksum evaluation off: the same bytes are a frame. */
     wsg_parser_init(&p, 0);
-    feed_chunked(&p, stream, sizeof ex2, 1, &e);
+    feed_chunked(&p, stream, MP_LEN(MP_LOOP_1234), 1, &e);
     REQUIRE(e.n == 1);
     CHECK_EQ(e.ev[0], WSG_PARSE_FRAME);
 }
@@ -205,8 +184,8 @@ static void test_parser_oversize(void)
                           (WSG_PAYLOAD_MAX + 1) & 0xFF,
                           (WSG_PAYLOAD_MAX + 1) >> 8};
 
-    memcpy(stream + len, ex1, sizeof ex1);
-    len += sizeof ex1;
+    memcpy(stream + len, MP(MP_LOOP_EMPTY), MP_LEN(MP_LOOP_EMPTY));
+    len += MP_LEN(MP_LOOP_EMPTY);
     wsg_parser_init(&p, 1);
     feed_chunked(&p, stream, len, 1, &e);
     REQUIRE(e.n == 2);

@@ -14,6 +14,7 @@
 #include <string.h>
 
 #include "fuzz_ids.h"
+#include "manual_packets.h"
 #include "wsg/axis.h"
 #include "wsg/proto.h"
 
@@ -211,22 +212,6 @@ static void gen_each_command(const char *dir)
 
 int main(int argc, char **argv)
 {
-    /* Chapter 1's example packets, byte for byte (see test_proto.c). */
-    static const uint8_t ex1[] = {0xAA, 0xAA, 0xAA, 0x01,
-                                  0x00, 0x00, 0xE8, 0x10};
-    static const uint8_t ex2[] = {0xAA, 0xAA, 0xAA, 0x01, 0x02,
-                                  0x00, 0x12, 0x34, 0x6D, 0x66};
-    static const uint8_t ex_homing[] = {0xAA, 0xAA, 0xAA, 0x20, 0x02,
-                                        0x00, 0x00, 0x00, 0xB3, 0xFD};
-    static const uint8_t ex_unknown[] = {0xAA, 0xAA, 0xAA, 0x90, 0x02,
-                                         0x00, 0x0E, 0x00, 0xFD, 0x02};
-    static const uint8_t ex_getacc[] = {0xAA, 0xAA, 0xAA, 0x30, 0x06,
-                                        0x00, 0x00, 0x00, 0x00, 0x00,
-                                        0x16, 0x43, 0xDC, 0xCB};
-    static const uint8_t ex_pending[] = {0xAA, 0xAA, 0xAA, 0x21, 0x02,
-                                         0x00, 0x1A, 0x00, 0x67, 0xCB};
-    static const uint8_t ex_final[] = {0xAA, 0xAA, 0xAA, 0x21, 0x02,
-                                       0x00, 0x00, 0x00, 0x28, 0x04};
     /* README's Homing request, and one with a SIZE above any command. */
     static const uint8_t req_homing[] = {0xAA, 0xAA, 0xAA, 0x20, 0x01,
                                          0x00, 0x00, 0x8F, 0x83};
@@ -235,19 +220,14 @@ int main(int argc, char **argv)
     static const uint8_t zero = 0;
     const char *dir = argc > 1 ? argv[1] : "corpus";
     struct gen g;
+    int i;
 
-    gen_raw(dir, "manual-ex1", 0, CTL_STEPS(STEPS_10), ex1, sizeof ex1);
-    gen_raw(dir, "manual-ex2", 0, CTL_STEPS(STEPS_10), ex2, sizeof ex2);
-    gen_raw(dir, "manual-homing-reply", 0, CTL_STEPS(STEPS_10), ex_homing,
-            sizeof ex_homing);
-    gen_raw(dir, "manual-unknown", 0, CTL_STEPS(STEPS_10), ex_unknown,
-            sizeof ex_unknown);
-    gen_raw(dir, "manual-getacc", 0, CTL_STEPS(STEPS_10), ex_getacc,
-            sizeof ex_getacc);
-    gen_raw(dir, "manual-pending", 0, CTL_STEPS(STEPS_10), ex_pending,
-            sizeof ex_pending);
-    gen_raw(dir, "manual-final", 0, CTL_STEPS(STEPS_10), ex_final,
-            sizeof ex_final);
+    for (i = 0; i < MP_COUNT; i++) {
+        char name[64];
+
+        snprintf(name, sizeof name, "manual-%s", manual_packets[i].name);
+        gen_raw(dir, name, 0, CTL_STEPS(STEPS_10), MP(i), MP_LEN(i));
+    }
     gen_raw(dir, "homing-request", 0, CTL_STEPS(STEPS_10), req_homing,
             sizeof req_homing);
     gen_raw(dir, "homing-request-nocrc", 0x08, CTL_STEPS(STEPS_10), req_homing,
