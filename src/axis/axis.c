@@ -206,6 +206,14 @@ static double wsg_axis_rep(const struct wsg_axis *ax, double phys)
     return phys + ax->ref_offset;
 }
 
+/* Where the fingers stand on the part when they squeeze it with force f:
+ * the part yields by f over its stiffness (the inverse of
+ * wsg_axis_contact_force). */
+static double wsg_axis_squeezed(const struct wsg_axis *ax, double f)
+{
+    return wsg_axis_rep(ax, ax->part_width) - f / ax->part_stiffness;
+}
+
 /* The next block in direction dir from the current width when pushing
  * with force f: the part yields by f over its stiffness and resists
  * closing only; the obstacle is rigid either way. Returns 0 when nothing
@@ -217,7 +225,7 @@ static int wsg_axis_next_block(const struct wsg_axis *ax, double dir, double f,
     int n = 0, i, found = 0;
 
     if (dir < 0 && ax->part) {
-        double p = wsg_axis_rep(ax, ax->part_width) - f / ax->part_stiffness;
+        double p = wsg_axis_squeezed(ax, f);
         /* Fingers that already squeeze the part harder than f (left there
          * by a block under a higher force limit) are blocked where they
          * are, not let through the part. */
@@ -253,7 +261,7 @@ static int wsg_axis_block_at(const struct wsg_axis *ax, double dir, double f,
     int n = 0, i, found = 0;
 
     if (dir < 0 && ax->part) {
-        double p = wsg_axis_rep(ax, ax->part_width) - f / ax->part_stiffness;
+        double p = wsg_axis_squeezed(ax, f);
         /* A part narrower than its own squeeze (made so while held) lets
          * the fingers close only as far as the end stop. */
         if (p < wsg_axis_end_stop(ax, -1.0))

@@ -59,7 +59,6 @@ struct wsg_ctl {
     struct wsg_watch watch; /* the listening socket */
     struct wsg_loop *loop;
     struct wsg_gripper *cur; /* the line being run acts on this one */
-    struct wsg_device *dev;  /* &cur->dev */
     unsigned nclients;
     unsigned ndead;
     char local[WSG_ADDR_LEN];
@@ -153,7 +152,7 @@ static void format_time(char *buf, size_t len, uint64_t us)
 
 static void cmd_part(struct wsg_ctl_client *c, int argc, char **argv)
 {
-    struct wsg_axis *ax = &c->ctl->dev->axis;
+    struct wsg_axis *ax = &c->ctl->cur->dev.axis;
     double width, stiffness = 0.0;
 
     if (argc == 2 && strcmp(argv[1], "none") == 0) {
@@ -180,7 +179,7 @@ static void cmd_part(struct wsg_ctl_client *c, int argc, char **argv)
 
 static void cmd_obstacle(struct wsg_ctl_client *c, int argc, char **argv)
 {
-    struct wsg_axis *ax = &c->ctl->dev->axis;
+    struct wsg_axis *ax = &c->ctl->cur->dev.axis;
     double width;
 
     if (argc != 2) {
@@ -230,7 +229,7 @@ static void cmd_fault(struct wsg_ctl_client *c, int argc, char **argv)
     }
     for (i = 0; i < sizeof faults / sizeof faults[0]; i++) {
         if (strcmp(argv[1], faults[i].name) == 0) {
-            wsg_axis_set_fault(&c->ctl->dev->axis, faults[i].flag, on);
+            wsg_axis_set_fault(&c->ctl->cur->dev.axis, faults[i].flag, on);
             reply(c, "ok fault %s %s", faults[i].name, on ? "on" : "off");
             return;
         }
@@ -247,14 +246,14 @@ static void reply_time(struct wsg_ctl_client *c)
 
     /* Steps run by hand may have left the gripper idle part way. */
     wsg_loop_touch(c->ctl->loop, c->ctl->cur);
-    format_time(t, sizeof t, c->ctl->dev->axis.time_us);
+    format_time(t, sizeof t, c->ctl->cur->dev.axis.time_us);
     reply(c, "ok %s", t);
 }
 
 static void cmd_time(struct wsg_ctl_client *c, int argc, char **argv)
 {
     struct wsg_loop *l = c->ctl->loop;
-    uint32_t step_us = c->ctl->dev->axis.cfg.step_us;
+    uint32_t step_us = c->ctl->cur->dev.axis.cfg.step_us;
     double v;
     int r;
 
@@ -371,7 +370,7 @@ static void append(char *buf, size_t cap, size_t *used, const char *fmt, ...)
 
 static void cmd_state(struct wsg_ctl_client *c)
 {
-    const struct wsg_device *d = c->ctl->dev;
+    const struct wsg_device *d = &c->ctl->cur->dev;
     const struct wsg_axis *ax = &d->axis;
     const struct wsg_loop *l = c->ctl->loop;
     uint32_t flags =
@@ -424,7 +423,7 @@ static void cmd_drop(struct wsg_ctl_client *c)
 static void cmd_reset(struct wsg_ctl_client *c)
 {
     /* Streams end with the power cycle (wsg_device_reset). */
-    wsg_device_reset(c->ctl->dev);
+    wsg_device_reset(&c->ctl->cur->dev);
     reply(c, "ok reset");
 }
 
@@ -496,7 +495,6 @@ static void run_line(struct wsg_ctl_client *c, char *line)
      * command reads or changes it; afterwards it is stepped if it now has
      * work. */
     c->ctl->cur = &c->ctl->loop->grippers[c->gripper];
-    c->ctl->dev = &c->ctl->cur->dev;
     wsg_loop_touch(c->ctl->loop, c->ctl->cur);
     run_command(c, argc, argv);
     wsg_loop_check(c->ctl->loop, c->ctl->cur);
