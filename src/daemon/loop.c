@@ -282,8 +282,6 @@ static void run_steps(struct wsg_loop *l, unsigned k)
         }
         l->dev_steps += k;
         g->at += k;
-        /* A final result sent may have ended a peer: settle after. */
-        queue_touched(l, g);
         if (wsg_device_busy(&g->dev)) {
             pp = &g->next_active;
         } else {
@@ -294,11 +292,6 @@ static void run_steps(struct wsg_loop *l, unsigned k)
     }
     l->grid += k;
     l->steps += k;
-}
-
-static void run_tick(struct wsg_loop *l)
-{
-    run_steps(l, l->tick_steps);
 }
 
 /* While disarmed nothing was active: the grid points up to now passed
@@ -360,7 +353,7 @@ static void on_timer(struct wsg_loop *l)
     if (l->due_ns <= now && now - l->due_ns > l->late_max_ns)
         l->late_max_ns = now - l->due_ns;
     while (l->due_ns <= now && n < WSG_LOOP_CATCHUP_MAX) {
-        run_tick(l);
+        run_steps(l, l->tick_steps);
         l->due_ns += l->period_ns;
         n++;
     }

@@ -95,8 +95,9 @@ void wsg_loop_set_grippers(struct wsg_loop *l, struct wsg_gripper *g,
 void wsg_loop_set_shared(struct wsg_loop *l, struct wsg_transport *t,
                          size_t n);
 /* Before anything acts on g from outside the loop's own dispatch (the
- * control channel): bring g's simulated time up to the grid and queue it
- * to be settled after the batch. */
+ * control channel), and when a transport marks a peer of g to be closed
+ * (even from a step's send): bring g's simulated time up to the grid and
+ * queue it to be settled after the batch. */
 void wsg_loop_touch(struct wsg_loop *l, struct wsg_gripper *g);
 /* After acting on g: step it from the next tick if it now has work. */
 void wsg_loop_check(struct wsg_loop *l, struct wsg_gripper *g);

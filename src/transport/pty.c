@@ -82,6 +82,13 @@ static void report_drops(struct wsg_pty *pty)
     pty->reported = pty->dropped;
 }
 
+/* Hang up after the batch (settle), also when a step's send failed. */
+static void hang_up_later(struct wsg_pty *pty)
+{
+    pty->hup = 1;
+    wsg_loop_touch(pty->loop, pty->master.owner->gripper);
+}
+
 static void set_events(struct wsg_pty *pty, uint32_t events)
 {
     int r;
@@ -94,7 +101,7 @@ static void set_events(struct wsg_pty *pty, uint32_t events)
          * over as if the port had been closed. */
         fprintf(stderr, "wsgemu: pty %s: epoll: %s\n", pty->path,
                 strerror(-r));
-        pty->hup = 1;
+        hang_up_later(pty);
         return;
     }
     pty->events = events;
@@ -108,7 +115,7 @@ static void write_failed(struct wsg_pty *pty, int err)
     if (err != EIO)
         fprintf(stderr, "wsgemu: pty %s: write: %s\n", pty->path,
                 strerror(err));
-    pty->hup = 1;
+    hang_up_later(pty);
 }
 
 /* After a send or a flush: watch EPOLLOUT while bytes wait. A host that
@@ -170,7 +177,7 @@ static void read_input(struct wsg_pty *pty, int closing)
         if (n < 0 && errno != EIO)
             fprintf(stderr, "wsgemu: pty %s: read: %s\n", pty->path,
                     strerror(errno));
-        pty->hup = 1;
+        hang_up_later(pty);
         return;
     }
 }
@@ -278,7 +285,7 @@ static void pty_handle(struct wsg_transport *t, struct wsg_watch *w,
     if (events & (EPOLLIN | EPOLLHUP | EPOLLERR))
         read_input(pty, closing);
     if (closing)
-        pty->hup = 1;
+        hang_up_later(pty);
 }
 
 static void pty_settle(struct wsg_transport *t)

@@ -99,6 +99,8 @@ static void conn_kill(struct wsg_tcp_conn *c, const char *why)
         return;
     c->dead = 1;
     c->tcp->ndead++;
+    /* Settled after the batch, also when a step's send ended it. */
+    wsg_loop_touch(c->tcp->loop, c->tcp->t->gripper);
     if (why)
         fprintf(stderr, "wsgemu: tcp %s: closing: %s\n", c->peer, why);
 }
