@@ -303,9 +303,12 @@ static void decode_out(struct line *l, uint8_t id, const uint8_t *p, size_t n)
         if (n != 8)
             break;
         sw = wsg_get_u16(p + 2);
-        add(l, " type=%u hwrev=%u swrev=%u.%u.%u serial=%lu", p[0], p[1],
-            sw >> 12, (sw >> 8) & 0xFu, (sw >> 4) & 0xFu,
-            (unsigned long)wsg_get_u32(p + 4));
+        /* The firmware is the one emulated; which emulator answered is
+         * worth a line in a bug report too. */
+        add(l,
+            " type=%u hwrev=%u swrev=%u.%u.%u serial=%lu emulator=wsgemu-%s",
+            p[0], p[1], sw >> 12, (sw >> 8) & 0xFu, (sw >> 4) & 0xFu,
+            (unsigned long)wsg_get_u32(p + 4), WSG_VERSION);
         return;
     }
     case WSG_CMD_GET_DEVICE_TAG:

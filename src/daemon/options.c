@@ -45,7 +45,8 @@ enum {
     OPT_LOG,
     OPT_CONFIG,
     OPT_MAX_CLIENTS,
-    OPT_GRIPPERS
+    OPT_GRIPPERS,
+    OPT_FORCE_SENSOR
 };
 
 /* The config file's keys are these names too (without the dashes). */
@@ -76,7 +77,9 @@ static const struct option long_options[] = {
     {"log", required_argument, NULL, OPT_LOG},
     {"config", required_argument, NULL, OPT_CONFIG},
     {"grippers", required_argument, NULL, OPT_GRIPPERS},
+    {"force-sensor", required_argument, NULL, OPT_FORCE_SENSOR},
     {"help", no_argument, NULL, 'h'},
+    {"version", no_argument, NULL, 'V'},
     {NULL, 0, NULL, 0}};
 
 static void usage(FILE *f)
@@ -123,6 +126,10 @@ static void usage(FILE *f)
         "                             FAST STOP when a TCP client closes\n"
         "                             without a Disconnect Announcement\n"
         "                             (07h) (default on)\n"
+        "  --force-sensor on|off      force measurement fingers fitted:\n"
+        "                             Tare (38h) works, 40h shows\n"
+        "                             SF_FORCECNTL_MODE while grasping\n"
+        "                             and holding (default off)\n"
         "  --serial N                 serial number (0..4294967295,\n"
         "                             default 1)\n"
         "  --tag TEXT                 device tag: 1..64 printable ASCII\n"
@@ -130,7 +137,11 @@ static void usage(FILE *f)
         "  --part WIDTH[:STIFFNESS]   a part of WIDTH mm (0..stroke)\n"
         "                             between the fingers at start,\n"
         "                             STIFFNESS N/mm (default 50)\n"
-        "\n"
+        "\n",
+        WSG_MAX_CLIENTS_MAX, WSG_MAX_CLIENTS_DEFAULT);
+    /* In two parts: C99 guarantees string literals of 4095 bytes only. */
+    fprintf(
+        f,
         "Emulator:\n"
         "  --step-us US               model step in microseconds\n"
         "                             (%u..%u, default %u)\n"
@@ -145,12 +156,14 @@ static void usage(FILE *f)
         "                             gets its own interfaces, counted up\n"
         "                             from the ones given (see README)\n"
         "  -h, --help                 show this help and exit\n"
+        "  -V, --version              show the version and exit\n"
         "\n"
         "Config file: one 'key = value' per line, the keys the long option\n"
         "names without dashes, the values as on the command line; blank\n"
         "lines and lines starting with '#' are ignored; spaces around key\n"
         "and value are dropped. no-crc and no-disconnect-fast-stop take\n"
-        "on|off (also true|false, yes|no, 1|0). Example:\n"
+        "on|off (also true|false, yes|no, 1|0), like crc,\n"
+        "disconnect-fast-stop and force-sensor. Example:\n"
         "  # cell 4\n"
         "  model = wsg50-210\n"
         "  tcp = 127.0.0.1:1000\n"
@@ -164,8 +177,8 @@ static void usage(FILE *f)
         "(the fields of the open interfaces only; with --grippers N each\n"
         "gripper field lists N values, comma-separated, in gripper order).\n"
         "SIGINT or SIGTERM stops the emulator with exit status 0.\n",
-        WSG_MAX_CLIENTS_MAX, WSG_MAX_CLIENTS_DEFAULT, WSG_STEP_US_MIN,
-        WSG_STEP_US_MAX, WSG_STEP_US_DEFAULT, WSG_GRIPPERS_MAX);
+        WSG_STEP_US_MIN, WSG_STEP_US_MAX, WSG_STEP_US_DEFAULT,
+        WSG_GRIPPERS_MAX);
 }
 
 /* Decimal digits only: strtoul would also take signs, spaces and hex. */
@@ -345,10 +358,13 @@ static int set_option(struct wsg_options *o, int id, const char *val,
         return 0;
     case OPT_CRC:
     case OPT_DISCONNECT_FAST_STOP:
+    case OPT_FORCE_SENSOR:
         if (parse_bool(val, &b) < 0)
             goto bad_bool;
         if (id == OPT_CRC)
             o->check_crc = b;
+        else if (id == OPT_FORCE_SENSOR)
+            o->force_sensor = b;
         else
             o->disconnect_fast_stop = b;
         return 0;
@@ -716,6 +732,17 @@ static enum wsg_options_result finish(struct wsg_options *o)
 
     if (!o->tcp_enabled && !o->udp_enabled && !o->pty_path && !o->can_iface)
         o->tcp_enabled = o->udp_enabled = 1;
+    /* Answers sent to the port it listens on would come back to it from
+     * its own address as requests, and it would answer itself forever. */
+    if (o->udp_enabled && o->udp.port != 0 &&
+        o->udp.port == o->udp_remote_port) {
+        fprintf(stderr,
+                "wsgemu: --udp: REMOTE port %u is the port it listens on, "
+                "so it would answer itself; give another REMOTE port "
+                "(try --help)\n",
+                o->udp_remote_port);
+        return WSG_OPTIONS_ERROR;
+    }
     if (wsg_axis_config_init(c, o->model ? o->model : "wsg50") < 0) {
         fprintf(stderr,
                 "wsgemu: --model: unknown model '%s' (known: wsg50, "
@@ -753,6 +780,7 @@ static enum wsg_options_result finish(struct wsg_options *o)
         return WSG_OPTIONS_ERROR;
     if (o->homing_dir != WSG_HOME_DEFAULT)
         c->homing_dir = o->homing_dir;
+    c->force_sensor = o->force_sensor;
     return check_fleet(o);
 }
 
@@ -808,7 +836,8 @@ static enum wsg_options_result read_config(struct wsg_options *o,
         for (opt = long_options; opt->name; opt++)
             if (strcmp(opt->name, key) == 0)
                 break;
-        if (!opt->name || opt->val == 'h' || opt->val == OPT_CONFIG) {
+        if (!opt->name || opt->val == 'h' || opt->val == 'V' ||
+            opt->val == OPT_CONFIG) {
             fprintf(stderr, "wsgemu: %s:%u: unknown setting '%s'\n", path,
                     lineno, key);
             goto cleanup;
@@ -857,9 +886,15 @@ enum wsg_options_result wsg_options_parse(struct wsg_options *o, int argc,
      * the command line is applied over it. Errors wait for the second
      * pass. optind = 0 makes glibc start over completely. */
     optind = 0;
-    while ((c = getopt_long(argc, argv, ":h", long_options, NULL)) != -1) {
+    while ((c = getopt_long(argc, argv, ":hV", long_options, NULL)) != -1) {
         if (c == 'h') {
             usage(stdout);
+            return WSG_OPTIONS_EXIT;
+        }
+        if (c == 'V') {
+            /* The emulator's version; the firmware it emulates is what
+             * Get System Information (50h) reports. */
+            printf("wsgemu %s\n", WSG_VERSION);
             return WSG_OPTIONS_EXIT;
         }
         if (c == OPT_CONFIG)
@@ -869,7 +904,7 @@ enum wsg_options_result wsg_options_parse(struct wsg_options *o, int argc,
         return WSG_OPTIONS_ERROR;
 
     optind = 0;
-    while ((c = getopt_long(argc, argv, ":h", long_options, &idx)) != -1) {
+    while ((c = getopt_long(argc, argv, ":hV", long_options, &idx)) != -1) {
         char err[512];
 
         switch (c) {

@@ -66,6 +66,7 @@ struct wsg_options {
     const char *device_tag;        /* NULL: none */
     int check_crc;                 /* 0 with --no-crc */
     int disconnect_fast_stop;      /* 0 with --no-disconnect-fast-stop */
+    int force_sensor;              /* --force-sensor on: tare, D9 */
     uint32_t step_us;
     const char *model; /* NULL: the default model */
     /* The web page's settings; negative (homing_dir: WSG_HOME_DEFAULT)

@@ -106,6 +106,9 @@ static void test_log(const char *dir)
     CHECK_EQ(f.status, WSG_E_CHECKSUM_ERROR);
     CHECK_EQ(emu_request(&c, WSG_CMD_GET_WIDTH, NULL, 0, NULL, EMU_REPLY_MS),
              WSG_E_SUCCESS);
+    CHECK_EQ(
+        emu_request(&c, WSG_CMD_GET_SYSTEM_INFO, NULL, 0, NULL, EMU_REPLY_MS),
+        WSG_E_SUCCESS);
 
     /* Flushed after the batch that sent the reply: there while running
      * (give the daemon a moment past its send). */
@@ -140,8 +143,13 @@ static void test_log(const char *dir)
         const char *const p10[] = {
             " out 43h GetOpeningWidth E_SUCCESS width=110.000", NULL};
         const char *const p11[] = {" in 43h GetOpeningWidth", NULL};
-        const char *const *all[] = {p1, p2, p3, p4,  p5, p6,
-                                    p7, p8, p9, p10, p11};
+        /* The firmware emulated, and the emulator's own version. */
+        const char *const p12[] = {" out 50h GetSystemInformation E_SUCCESS "
+                                   "type=1 hwrev=1 swrev=2.2.0 serial=1 "
+                                   "emulator=wsgemu-" WSG_VERSION,
+                                   NULL};
+        const char *const *all[] = {p1, p2, p3, p4,  p5,  p6,
+                                    p7, p8, p9, p10, p11, p12};
 
         for (size_t i = 0; i < sizeof all / sizeof all[0]; i++)
             expect(text, all[i]);

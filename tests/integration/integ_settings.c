@@ -8,6 +8,12 @@
  * - --homing-direction negative: a default homing ends at 0 mm;
  * - --model wsg32: 53h's stroke is 68 mm; --part 40: a grasp at 40 mm holds;
  * - --time-scale and crc on|off are taken;
+ * - --force-sensor on (force measurement fingers, also as a config key):
+ *   Tare (38h) succeeds, but E_ACCESS_DENIED while holding, and 40h shows
+ *   SF_FORCECNTL_MODE (D9) while holding; without it, Tare answers
+ *   E_NOT_AVAILABLE and D9 never shows;
+ * - --version prints the version; --udp PORT:PORT (answers to its own
+ *   port) is refused;
  * - --config FILE gives the same results; an option overrides the file,
  *   wherever --config stands on the command line;
  * - bad values exit 2 naming the valid range; a bad file line exits 2
@@ -18,6 +24,7 @@
 
 #include "check.h"
 #include "emu.h"
+#include "wsg/axis.h"
 
 #include <stdlib.h>
 #include <string.h>
@@ -107,8 +114,67 @@ static void check_group2(const char *const *args)
         emu_request(&c, WSG_CMD_GET_GRASP_STATE, NULL, 0, &f, EMU_REPLY_MS),
         WSG_E_SUCCESS);
     CHECK_EQ(EMU_PARAMS(&f)[0], 4); /* HOLDING */
+    /* No force measurement fingers by default. */
+    CHECK_EQ(emu_request(&c, WSG_CMD_TARE, NULL, 0, NULL, EMU_REPLY_MS),
+             WSG_E_NOT_AVAILABLE);
+    CHECK_EQ(
+        emu_request(&c, WSG_CMD_GET_SYSTEM_STATE, NULL, 0, &f, EMU_REPLY_MS),
+        WSG_E_SUCCESS);
+    CHECK_EQ(wsg_get_u32(EMU_PARAMS(&f)) & WSG_SF_FORCECNTL_MODE, 0);
     emu_close(&c);
     CHECK_EQ(emu_stop(&e), 0);
+}
+
+/* Force measurement fingers fitted (--force-sensor on, or the file's
+ * force-sensor = on), a part of 40 mm between them. */
+static void check_force_sensor(const char *const *args)
+{
+    struct emu e;
+    struct emu_client c;
+    struct emu_frame f;
+    uint8_t dir = 0, p[8];
+    size_t n = emu_grasp_payload(p, 40.0f, 100.0f);
+    int imm = -1;
+
+    REQUIRE(emu_start(&e, exe, args) == 0);
+    REQUIRE(emu_open(&c, &e, &emu_tcp) == 0);
+    CHECK_EQ(emu_request(&c, WSG_CMD_TARE, NULL, 0, NULL, EMU_REPLY_MS),
+             WSG_E_SUCCESS);
+    CHECK_EQ(emu_motion(&c, WSG_CMD_HOMING, &dir, 1, 10000, &imm),
+             WSG_E_SUCCESS);
+    CHECK_EQ(emu_motion(&c, WSG_CMD_GRASP, p, n, 10000, &imm), WSG_E_SUCCESS);
+    CHECK_EQ(
+        emu_request(&c, WSG_CMD_GET_SYSTEM_STATE, NULL, 0, &f, EMU_REPLY_MS),
+        WSG_E_SUCCESS);
+    CHECK(wsg_get_u32(EMU_PARAMS(&f)) & WSG_SF_FORCECNTL_MODE);
+    /* 3.3.9: not in force control mode, i.e. not while holding. */
+    CHECK_EQ(emu_request(&c, WSG_CMD_TARE, NULL, 0, NULL, EMU_REPLY_MS),
+             WSG_E_ACCESS_DENIED);
+    emu_close(&c);
+    CHECK_EQ(emu_stop(&e), 0);
+}
+
+static void test_force_sensor(void)
+{
+    static const char *const a[] = {
+        "--tcp", "127.0.0.1:0", "--part", "40", "--force-sensor", "on", NULL};
+    char path[256];
+    const char *b[] = {"--tcp", "127.0.0.1:0", "--config", path, NULL};
+
+    check_force_sensor(a);
+    write_file(path, sizeof path, "part = 40\nforce-sensor = on\n");
+    check_force_sensor(b);
+    unlink(path);
+}
+
+static void test_version(void)
+{
+    static const char *const v[] = {"--version", NULL};
+    char out[256], err[256];
+
+    CHECK_EQ(emu_run(exe, v, 5000, out, sizeof out, err, sizeof err), 0);
+    CHECK(strncmp(out, "wsgemu ", 7) == 0 && strchr(out, '.') != NULL);
+    CHECK(strchr(out, '\n') == out + strlen(out) - 1); /* one line */
 }
 
 static void test_options(void)
@@ -232,6 +298,9 @@ static void bad(const char *const *args, const char *want)
 
 static void test_bad_values(void)
 {
+    static const char *const sensor[] = {"--force-sensor", "maybe", NULL};
+    static const char *const udp_self[] = {"--udp", "127.0.0.1:41500:41500",
+                                           NULL};
     static const char *const acc[] = {"--acceleration", "6000", NULL};
     static const char *const acc32[] = {"--model", "wsg32", "--acceleration",
                                         "50", NULL};
@@ -273,6 +342,8 @@ static void test_bad_values(void)
     bad(clamp, "--clamping-travel");
     bad(tol, "0..110");
     bad(crc, "--crc");
+    bad(sensor, "--force-sensor");
+    bad(udp_self, "would answer itself");
     bad(ctl, "--control");
     bad(nofile, "/nonexistent/wsg.conf");
 }
@@ -306,6 +377,8 @@ int main(int argc, char **argv)
     test_options();
     test_config();
     test_override();
+    test_force_sensor();
+    test_version();
     test_bad_values();
     test_bad_files();
     TEST_EXIT();
