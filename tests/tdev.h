@@ -21,12 +21,14 @@ struct tdev_pkt {
     uint8_t params[WSG_REPLY_PARAMS_MAX];
     size_t raw_len;
     uint8_t raw[WSG_FRAME_MAX];
+    int reply; /* a command's immediate answer, not a final result */
 };
 
 struct tdev_sess {
     struct wsg_session s;
     struct wsg_parser parser;
-    int n; /* packets captured and not yet taken */
+    int n;          /* packets captured and not yet taken */
+    int final_from; /* packets before this hold no final result not taken */
     struct tdev_pkt pkts[TDEV_MAX_PKTS];
 };
 
@@ -52,6 +54,7 @@ static inline void tdev_send(struct wsg_session *s, const uint8_t *pkt,
     memcpy(p->params, pkt + 8, p->plen);
     p->raw_len = len;
     memcpy(p->raw, pkt, len);
+    p->reply = 0;
 }
 
 static inline struct wsg_session *tdev_lookup(void *ctx, uint32_t tag)
@@ -106,8 +109,17 @@ static inline uint16_t tdev_cmd_on(struct tdev *t, int i, uint8_t id,
 
     REQUIRE(n > 0);
     tdev_feed(t, i, pkt, n);
-    REQUIRE(t->sess[i].n == before + 1); /* exactly one answer */
+    /* Exactly one answer, first; what may follow it at once are final
+     * results the command caused (a Stop ends this session's motion). */
+    REQUIRE(t->sess[i].n >= before + 1);
     CHECK_EQ(t->sess[i].pkts[before].id, id);
+    t->sess[i].pkts[before].reply = 1;
+    for (n = (size_t)before + 1; n < (size_t)t->sess[i].n; n++) {
+        uint8_t m = t->sess[i].pkts[n].id;
+        CHECK(m == WSG_CMD_HOMING || m == WSG_CMD_PREPOSITION ||
+              m == WSG_CMD_GRASP || m == WSG_CMD_RELEASE);
+        CHECK(t->sess[i].pkts[n].status != WSG_E_CMD_PENDING);
+    }
     return t->sess[i].pkts[before].status;
 }
 
@@ -129,7 +141,7 @@ static inline void tdev_clear(struct tdev *t)
     int i;
 
     for (i = 0; i < TDEV_SESSIONS; i++)
-        t->sess[i].n = 0;
+        t->sess[i].n = t->sess[i].final_from = 0;
 }
 
 /* Step until session i receives a packet with this ID; returns the number
@@ -156,13 +168,24 @@ static inline void tdev_steps(struct tdev *t, long n)
         wsg_device_step(&t->dev);
 }
 
-/* The final result of the motion command id, after its E_CMD_PENDING. */
+/* The first final result of the motion command id not taken yet: already
+ * sent (a Stop ends a motion at once), or after up to max_steps steps. */
 static inline uint16_t tdev_final(struct tdev *t, uint8_t id, long max_steps)
 {
-    long k = tdev_run_until(t, 0, id, max_steps);
+    struct tdev_sess *ts = &t->sess[0];
+    long k;
+    int j;
 
-    REQUIRE(k > 0);
-    return tdev_last(t)->status;
+    for (k = 0;; k++) {
+        for (j = ts->final_from; j < ts->n; j++) {
+            if (ts->pkts[j].id == id && !ts->pkts[j].reply) {
+                ts->final_from = j + 1;
+                return ts->pkts[j].status;
+            }
+        }
+        REQUIRE(k < max_steps);
+        wsg_device_step(&t->dev);
+    }
 }
 
 static inline uint16_t tdev_home(struct tdev *t, uint8_t dir)

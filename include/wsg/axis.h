@@ -3,10 +3,12 @@
  * fingers, their drive and a part between them.
  *
  * Command handlers only record requests (wsg_axis_request_*) and write
- * session settings; the physical state changes only in wsg_axis_step(), which
- * advances simulated time by exactly one fixed step. The model reads no clock
- * and does no I/O: the caller drives it, a test with a fake clock, the daemon
- * from a timerfd. Results of motion commands leave through a callback.
+ * session settings; the state changes only in wsg_axis_step(), which
+ * advances simulated time by exactly one fixed step, and in
+ * wsg_axis_settle(), a step of zero length that applies the requests. The
+ * model reads no clock and does no I/O: the caller drives it, a test with a
+ * fake clock, the daemon from a timerfd. Results of motion commands leave
+ * through a callback.
  *
  * Units: mm, mm/s, mm/s^2, N, microseconds. Width is the distance between
  * the fingers (0 = closed).
@@ -189,8 +191,13 @@ void wsg_axis_init(struct wsg_axis *ax, const struct wsg_axis_config *cfg,
 /* Power cycle: session settings back to defaults, not referenced. */
 void wsg_axis_reset(struct wsg_axis *ax);
 
-/* Advance simulated time by one step (cfg.step_us). */
+/* Advance simulated time by one step (cfg.step_us): settle, then move. */
 void wsg_axis_step(struct wsg_axis *ax);
+/* A step of zero length: apply the recorded requests (FAST STOP,
+ * acknowledge, stop, a new motion) and the consequences of faults now,
+ * advancing neither time nor the fingers, so that the next answer shows
+ * them (a 40h right after "ack" sees FAST STOP cleared). */
+void wsg_axis_settle(struct wsg_axis *ax);
 /* Nothing moving, pending or changing: steps would not change the state, so
  * a caller may skip them (only time_us would advance). */
 int wsg_axis_idle(const struct wsg_axis *ax);

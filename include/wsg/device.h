@@ -95,7 +95,9 @@ void wsg_device_reset(struct wsg_device *d);
 
 void wsg_session_init(struct wsg_session *s, uint32_t tag, unsigned flags,
                       wsg_send_fn send, void *ctx);
-/* The peer went away (TCP close): FAST STOP unless it announced it. */
+/* The peer went away (TCP close): FAST STOP at once unless it announced
+ * it. The transport must no longer resolve s's tag (its lookup returns
+ * NULL), since a motion s owned ends here. */
 void wsg_device_session_closed(struct wsg_device *d, struct wsg_session *s);
 
 /* Feed received bytes: every frame, checksum error and oversize is
@@ -114,6 +116,10 @@ void wsg_device_dispatch(struct wsg_device *d, struct wsg_session *s,
 
 /* One model step; final results leave through lookup/send. */
 void wsg_device_step(struct wsg_device *d);
+/* Apply what was requested outside a command (a fault injected, a
+ * connection closed) now, without a step; wsg_device_dispatch does this
+ * itself around every command. */
+void wsg_device_settle(struct wsg_device *d);
 /* Send the stream packets of s that are due at the device's time. */
 void wsg_device_poll_streams(struct wsg_device *d, struct wsg_session *s);
 /* The same for every streaming session. */
@@ -131,5 +137,8 @@ void wsg_device_advance_idle(struct wsg_device *d, uint64_t nsteps);
 
 /* The command table, for tools and logs: name of an ID or NULL. */
 const char *wsg_cmd_name(uint8_t id);
+/* A request of this ID with len payload bytes passes the length rules
+ * (1 or 0); an unknown ID fits nothing. */
+int wsg_cmd_request_fits(uint8_t id, size_t len);
 
 #endif

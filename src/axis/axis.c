@@ -10,8 +10,10 @@
  * homing takes its reference, a preposition stops or clamps, a grasp holds
  * or reports no part by the clamping-travel window of NOTES.md.
  *
- * Handlers record requests; wsg_axis_step applies them in a fixed order
- * (FAST STOP, acknowledge, stop, new motion) and then advances the physics.
+ * Handlers record requests; wsg_axis_settle applies them in a fixed order
+ * (FAST STOP, acknowledge, stop, new motion), and wsg_axis_step settles and
+ * then advances the physics. The dispatcher settles after every command, so
+ * the next answer already reflects it.
  */
 #include <errno.h>
 #include <math.h>
@@ -619,13 +621,18 @@ static void wsg_axis_thermal(struct wsg_axis *ax, double dt)
     ax->thermal_faults = f;
 }
 
+void wsg_axis_settle(struct wsg_axis *ax)
+{
+    wsg_axis_apply_requests(ax);
+    wsg_axis_apply_faults(ax);
+}
+
 void wsg_axis_step(struct wsg_axis *ax)
 {
     double dt = ax->cfg.step_us * 1e-6;
 
     ax->time_us += ax->cfg.step_us;
-    wsg_axis_apply_requests(ax);
-    wsg_axis_apply_faults(ax);
+    wsg_axis_settle(ax);
     if (ax->motion.kind != WSG_MOTION_NONE)
         wsg_axis_advance(ax, dt);
     else if (ax->clamping)

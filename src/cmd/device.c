@@ -93,10 +93,15 @@ static void wsg_session_end_streams(struct wsg_device *d,
 
 void wsg_device_session_closed(struct wsg_device *d, struct wsg_session *s)
 {
-    if ((s->flags & WSG_SESSION_CONNECTION) && !s->announced &&
-        d->disconnect_fast_stop)
-        wsg_axis_request_fast_stop(&d->axis);
     wsg_session_end_streams(d, s);
+    if ((s->flags & WSG_SESSION_CONNECTION) && !s->announced &&
+        d->disconnect_fast_stop) {
+        /* At once, as for a 23h: the motion is aborted now (its owner
+         * told if still there; s itself no longer resolves), and the next
+         * answer, to anyone, shows FAST STOP. */
+        wsg_axis_request_fast_stop(&d->axis);
+        wsg_axis_settle(&d->axis);
+    }
 }
 
 void wsg_device_end_streams(struct wsg_device *d)
@@ -236,6 +241,11 @@ void wsg_device_poll_streaming(struct wsg_device *d)
 void wsg_device_step(struct wsg_device *d)
 {
     wsg_axis_step(&d->axis);
+}
+
+void wsg_device_settle(struct wsg_device *d)
+{
+    wsg_axis_settle(&d->axis);
 }
 
 int wsg_device_idle(const struct wsg_device *d)

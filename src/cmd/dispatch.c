@@ -11,6 +11,16 @@ const char *wsg_cmd_name(uint8_t id)
     return wsg_cmd_table[id].name;
 }
 
+int wsg_cmd_request_fits(uint8_t id, size_t len)
+{
+    const struct wsg_cmd_desc *c = &wsg_cmd_table[id];
+
+    if (!c->handler)
+        return 0;
+    return (len >= c->min_len && len <= c->max_len) ||
+           (len == 0 && (c->flags & WSG_CMDF_EMPTY_OK));
+}
+
 static uint16_t wsg_cmd_check(const struct wsg_device *d,
                               const struct wsg_session *s,
                               const struct wsg_cmd_desc *c,
@@ -48,9 +58,16 @@ void wsg_device_dispatch(struct wsg_device *d, struct wsg_session *s,
     uint16_t st;
 
     r.len = 0;
+    /* What a closed connection or a fault left pending counts before this
+     * command is judged; what this command asked for is applied once it is
+     * answered, so its reply goes out before any final result it causes
+     * (22h E_SUCCESS, then the stopped motion's E_CMD_ABORTED) and the next
+     * command, even in the same read, sees the new state. */
+    wsg_axis_settle(&d->axis);
     st = wsg_cmd_check(d, s, c, f);
     if (st == WSG_E_SUCCESS)
         st = c->handler(d, s, f, &r);
     wsg_device_reply(d, s, f->id, st, r.params,
                      st == WSG_E_SUCCESS ? r.len : 0);
+    wsg_axis_settle(&d->axis);
 }

@@ -488,15 +488,22 @@ static void run_line(struct wsg_ctl_client *c, char *line)
         if (*p)
             *p++ = '\0';
     }
-    /* An empty line asks nothing (nc users hit return twice). */
-    if (argc == 0)
+    /* Every line gets its one answer, so a script that reads one line per
+     * line it sent stays in step, even after a stray empty one. */
+    if (argc == 0) {
+        reply(c, "error empty line (try help)");
         return;
+    }
     /* The selected gripper's time is brought up to the grid before the
      * command reads or changes it; afterwards it is stepped if it now has
-     * work. */
+     * work. Settled on both sides like a gripper command: what a close
+     * left pending shows in "state", and a fault's or a drop's
+     * consequences (FAST STOP, a motion aborted) are there when "ok" is. */
     c->ctl->cur = &c->ctl->loop->grippers[c->gripper];
     wsg_loop_touch(c->ctl->loop, c->ctl->cur);
+    wsg_device_settle(&c->ctl->cur->dev);
     run_command(c, argc, argv);
+    wsg_device_settle(&c->ctl->cur->dev);
     wsg_loop_check(c->ctl->loop, c->ctl->cur);
 }
 

@@ -63,6 +63,8 @@ enum fuzz_phase {
 struct fuzz_sess {
     struct wsg_session s;
     struct wsg_parser parser;
+    int closing; /* being closed: its tag resolves no more, as in a
+                    transport */
 };
 
 static struct {
@@ -215,16 +217,20 @@ static void fuzz_send(struct wsg_session *s, const uint8_t *pkt, size_t len)
                 (unsigned long)B.dev.axis.time_us, (unsigned)s->tag,
                 (int)B.phase, id, wsg_status_name(status));
 
-    switch (B.phase) {
-    case FUZZ_PH_INPUT:
-        fuzz_answer(s, id, status, plen, pkt + 8);
-        break;
-    case FUZZ_PH_STEP:
-        /* The final result the model just handed to lookup. */
+    /* A final result the model just handed to lookup: from a step, or
+     * settled around a received command (a Stop ends a motion, a command
+     * lets a closed connection's FAST STOP through). */
+    if (B.final_sess &&
+        (B.phase == FUZZ_PH_STEP || B.phase == FUZZ_PH_INPUT)) {
         FUZZ_CHECK(s == B.final_sess);
         FUZZ_CHECK(fuzz_is_motion(id) && status != WSG_E_CMD_PENDING);
         FUZZ_CHECK(plen == 0);
         B.final_sess = NULL;
+        return;
+    }
+    switch (B.phase) {
+    case FUZZ_PH_INPUT:
+        fuzz_answer(s, id, status, plen, pkt + 8);
         break;
     case FUZZ_PH_STREAM:
         FUZZ_CHECK(fuzz_is_stream(id) && status == WSG_E_SUCCESS);
@@ -242,9 +248,12 @@ static struct wsg_session *fuzz_lookup(void *ctx, uint32_t tag)
     int i;
 
     (void)ctx;
-    /* Final results come from steps only, one at a time, and only for a
-     * command that was answered E_CMD_PENDING under this tag. */
-    FUZZ_CHECK(B.phase == FUZZ_PH_STEP && !B.final_sess);
+    /* Final results come one at a time, only for a command that was
+     * answered E_CMD_PENDING under this tag, from a step or from the
+     * settling around a received command (never between commands). */
+    FUZZ_CHECK(B.phase == FUZZ_PH_STEP ||
+               (B.phase == FUZZ_PH_INPUT && B.event));
+    FUZZ_CHECK(!B.final_sess);
     FUZZ_CHECK(tag < FUZZ_TAGS && B.owed[tag] > 0);
     B.owed[tag]--;
     if (B.trace)
@@ -252,7 +261,7 @@ static struct wsg_session *fuzz_lookup(void *ctx, uint32_t tag)
                 (unsigned long)B.dev.axis.time_us, (unsigned)tag,
                 B.dev.axis.width, B.dev.axis.ref_offset);
     for (i = 0; i < 2; i++)
-        if (B.sess[i].s.tag == tag) {
+        if (B.sess[i].s.tag == tag && !B.sess[i].closing) {
             B.final_sess = &B.sess[i].s;
             return B.final_sess;
         }
@@ -266,6 +275,7 @@ static void fuzz_session_open(int i, uint32_t tag)
     wsg_session_init(&B.sess[i].s, tag, i == 0 ? WSG_SESSION_CONNECTION : 0,
                      fuzz_send, &B.sess[i]);
     wsg_parser_init(&B.sess[i].parser, B.check_crc);
+    B.sess[i].closing = 0;
 }
 
 void fuzz_bench_begin(uint8_t cfg)
@@ -352,12 +362,14 @@ static void fuzz_world(unsigned ev, const uint8_t *data, size_t len)
         if (B.next_tag >= FUZZ_TAGS)
             break;
         k = (int)(B.cur - B.sess);
-        wsg_device_session_closed(&B.dev, &B.cur->s);
+        B.cur->closing = 1;
+        wsg_device_session_closed(&B.dev, &B.cur->s); /* settles itself */
         fuzz_session_open(k, B.next_tag++);
-        break;
+        return;
     default:
-        break;
+        return;
     }
+    wsg_device_settle(&B.dev);
 }
 
 void fuzz_bench_chunk(uint8_t ctl, const uint8_t *data, size_t len)
@@ -378,8 +390,12 @@ void fuzz_bench_chunk(uint8_t ctl, const uint8_t *data, size_t len)
         wsg_device_input(&B.dev, &B.cur->s, &B.cur->parser, data, len);
     /* The chunk's last event was answered too. */
     FUZZ_CHECK(!B.event || B.answers == 1);
-    B.phase = FUZZ_PH_IDLE;
+    /* World events settle as the control channel does: a fault's
+     * consequences (a motion aborted) may send final results. */
+    B.phase = FUZZ_PH_STEP;
     fuzz_world(ev, data, len);
+    FUZZ_CHECK(!B.final_sess);
+    B.phase = FUZZ_PH_IDLE;
     for (n = steps[(ctl >> 1) & 7u]; n > 0; n--)
         fuzz_step();
 }

@@ -17,7 +17,11 @@
  * - "reset" is a power cycle: not referenced, acceleration 150 again,
  *   streams ended;
  * - errors: an unknown command, bad arguments, a too long line; several
- *   lines in one write are all answered, in order.
+ *   lines in one write are all answered, in order, an empty one too;
+ * - every answer reflects its command at once (time paused, or packets in
+ *   one write): 40h/41h/44h after a motion command, Stop, FAST STOP,
+ *   "ack", a close without 07h and a control fault; a motion right after
+ *   "ack" is accepted.
  */
 #include "check.h"
 #include "emu.h"
@@ -257,11 +261,14 @@ static void test_errors(struct ctl *k)
     CHECK(strncmp(ctl_cmd(k, big), "error ", 6) == 0);
     CHECK(ctl_is_ok(ctl_cmd(k, "time")));
 
-    /* Several lines in one write, answered in order; an empty line and
-     * CRLF line ends are fine. */
+    /* Several lines in one write, answered in order, CRLF line ends too;
+     * an empty line is answered like any other, so a script reading one
+     * answer per line stays in step. */
     REQUIRE(ctl_write(k, "obstacle 30\r\n\nnope\nobstacle none\n") == 0);
     REQUIRE(ctl_line(k, line, sizeof line) == 0);
     CHECK(strcmp(line, "ok obstacle 30") == 0);
+    REQUIRE(ctl_line(k, line, sizeof line) == 0);
+    CHECK(strcmp(line, "error empty line (try help)") == 0);
     REQUIRE(ctl_line(k, line, sizeof line) == 0);
     CHECK(strncmp(line, "error ", 6) == 0);
     REQUIRE(ctl_line(k, line, sizeof line) == 0);
@@ -403,6 +410,164 @@ static void test_faults(struct emu_client *c, struct ctl *k)
     }
 }
 
+/* Packets, each encoded whole, sent in one write: the daemon reads them in
+ * one go, with no model step between them. */
+static void send_batch(struct emu_client *c, const uint8_t *ids,
+                       const void *const *payloads, const size_t *lens, int n)
+{
+    uint8_t buf[1024];
+    size_t used = 0;
+    int i;
+
+    for (i = 0; i < n; i++) {
+        size_t m = wsg_frame_encode(buf + used, sizeof buf - used, ids[i],
+                                    payloads[i], lens[i]);
+        REQUIRE(m > 0);
+        used += m;
+    }
+    REQUIRE(emu_send_raw(c, buf, used) == 0);
+}
+
+/* The next packet with this ID: its status, and its first parameter byte
+ * (41h) or u32/float (40h, 44h) in *v. */
+static int next_of(struct emu_client *c, uint8_t id, double *v)
+{
+    struct emu_frame f;
+    int r = emu_recv_id(c, id, &f, EMU_REPLY_MS);
+
+    if (r != 1)
+        fprintf(stderr, "next_of: no %02Xh packet (%d)\n", id, r);
+    REQUIRE(r == 1);
+    if (v && f.status == WSG_E_SUCCESS) {
+        if (id == WSG_CMD_GET_GRASP_STATE)
+            *v = EMU_PARAMS(&f)[0];
+        else if (id == WSG_CMD_GET_SYSTEM_STATE)
+            *v = wsg_get_u32(EMU_PARAMS(&f));
+        else
+            *v = wsg_get_f32(EMU_PARAMS(&f));
+    }
+    return (int)f.status;
+}
+
+/* Every answer reflects its command at once: with time paused (no step
+ * at all), or in the same write, 40h/41h/44h read right after Stop, FAST
+ * STOP, "ack", a motion command, a close without 07h or a control fault
+ * show the new state, and a motion sent right after "ack" is accepted. */
+static void test_at_once(struct emu *e, struct emu_client *c, struct ctl *k)
+{
+    static const uint8_t ack[3] = {'a', 'c', 'k'};
+    const uint8_t q[3] = {WSG_CMD_GET_SYSTEM_STATE, WSG_CMD_GET_GRASP_STATE,
+                          WSG_CMD_GET_SPEED};
+    uint8_t mv[16], ids[5];
+    const void *pl[5];
+    size_t ln[5], n = emu_move_payload(mv, 0, 60.0f, 10.0f);
+    double fl = 0, gs = 0, sp = 0;
+    float v = 0;
+    struct emu_client m;
+    int i;
+
+    REQUIRE(home(c, WSG_HOME_POSITIVE) == WSG_E_SUCCESS);
+    CMD_OK(k, "time pause");
+    /* A motion, then the three readings: moving, positioning. */
+    ids[0] = WSG_CMD_PREPOSITION, pl[0] = mv, ln[0] = n;
+    for (i = 0; i < 3; i++)
+        ids[i + 1] = q[i], pl[i + 1] = NULL, ln[i + 1] = 0;
+    send_batch(c, ids, pl, ln, 4);
+    CHECK_EQ(next_of(c, WSG_CMD_PREPOSITION, NULL), WSG_E_CMD_PENDING);
+    CHECK_EQ(next_of(c, q[0], &fl), WSG_E_SUCCESS);
+    CHECK((uint32_t)fl & WSG_SF_MOVING);
+    CHECK_EQ(next_of(c, q[1], &gs), WSG_E_SUCCESS);
+    CHECK_EQ(gs, WSG_GS_POSITIONING);
+    CHECK_EQ(next_of(c, q[2], &sp), WSG_E_SUCCESS);
+    CMD_OK(k, "time step 100"); /* under way at 10 mm/s */
+    CHECK(emu_get_float(c, WSG_CMD_GET_SPEED, &v) == 0);
+    CHECK(v < -5.0f || v > 5.0f);
+
+    /* Stop: standing still, idle, the axis stopped; the motion's final
+     * result after Stop's own answer. */
+    ids[0] = WSG_CMD_STOP, pl[0] = NULL, ln[0] = 0;
+    send_batch(c, ids, pl, ln, 4);
+    CHECK_EQ(next_of(c, WSG_CMD_STOP, NULL), WSG_E_SUCCESS);
+    CHECK_EQ(next_of(c, WSG_CMD_PREPOSITION, NULL), WSG_E_CMD_ABORTED);
+    CHECK_EQ(next_of(c, q[0], &fl), WSG_E_SUCCESS);
+    CHECK(((uint32_t)fl & (WSG_SF_MOVING | WSG_SF_AXIS_STOPPED)) ==
+          WSG_SF_AXIS_STOPPED);
+    CHECK_EQ(next_of(c, q[1], &gs), WSG_E_SUCCESS);
+    CHECK_EQ(gs, WSG_GS_IDLE);
+    CHECK_EQ(next_of(c, q[2], &sp), WSG_E_SUCCESS);
+    CHECK_NEAR(sp, 0.0, 1e-6);
+
+    /* A motion, one step, then FAST STOP: error state at once. */
+    ids[0] = WSG_CMD_PREPOSITION, pl[0] = mv, ln[0] = n;
+    send_batch(c, ids, pl, ln, 1);
+    CHECK_EQ(next_of(c, WSG_CMD_PREPOSITION, NULL), WSG_E_CMD_PENDING);
+    CMD_OK(k, "time step 100");
+    ids[0] = WSG_CMD_FAST_STOP, pl[0] = NULL, ln[0] = 0;
+    send_batch(c, ids, pl, ln, 4);
+    CHECK_EQ(next_of(c, WSG_CMD_FAST_STOP, NULL), WSG_E_SUCCESS);
+    CHECK_EQ(next_of(c, WSG_CMD_PREPOSITION, NULL), WSG_E_CMD_ABORTED);
+    CHECK_EQ(next_of(c, q[0], &fl), WSG_E_SUCCESS);
+    CHECK(((uint32_t)fl & (WSG_SF_MOVING | WSG_SF_FAST_STOP)) ==
+          WSG_SF_FAST_STOP);
+    CHECK_EQ(next_of(c, q[1], &gs), WSG_E_SUCCESS);
+    CHECK_EQ(gs, WSG_GS_ERROR);
+    CHECK_EQ(next_of(c, q[2], &sp), WSG_E_SUCCESS);
+    CHECK_NEAR(sp, 0.0, 1e-6);
+
+    /* FAST STOP, "ack" and a motion in one write, no step: the motion is
+     * accepted, and 40h shows it moving, out of FAST STOP. */
+    ids[0] = WSG_CMD_FAST_STOP, pl[0] = NULL, ln[0] = 0;
+    ids[1] = WSG_CMD_ACK_FAST_STOP, pl[1] = ack, ln[1] = 3;
+    ids[2] = WSG_CMD_PREPOSITION, pl[2] = mv, ln[2] = n;
+    ids[3] = q[0], pl[3] = NULL, ln[3] = 0;
+    ids[4] = q[1], pl[4] = NULL, ln[4] = 0;
+    send_batch(c, ids, pl, ln, 5);
+    CHECK_EQ(next_of(c, WSG_CMD_FAST_STOP, NULL), WSG_E_SUCCESS);
+    CHECK_EQ(next_of(c, WSG_CMD_ACK_FAST_STOP, NULL), WSG_E_SUCCESS);
+    CHECK_EQ(next_of(c, WSG_CMD_PREPOSITION, NULL), WSG_E_CMD_PENDING);
+    CHECK_EQ(next_of(c, q[0], &fl), WSG_E_SUCCESS);
+    CHECK(((uint32_t)fl & (WSG_SF_MOVING | WSG_SF_FAST_STOP)) ==
+          WSG_SF_MOVING);
+    CHECK_EQ(next_of(c, q[1], &gs), WSG_E_SUCCESS);
+    CHECK_EQ(gs, WSG_GS_POSITIONING);
+
+    /* Another client closes without 07h: FAST STOP, already there for the
+     * next command, and the running motion aborted. */
+    REQUIRE(emu_open(&m, e, &emu_tcp) == 0);
+    REQUIRE(emu_sync(&m, EMU_REPLY_MS) == 0);
+    emu_abort(&m);
+    emu_sleep_ms(50); /* the daemon sees the close before the next read */
+    CHECK_EQ(next_of(c, WSG_CMD_PREPOSITION, NULL), WSG_E_CMD_ABORTED);
+    /* ...which "ack" and a motion sent at once get past. */
+    send_batch(c, ids + 1, pl + 1, ln + 1, 4);
+    CHECK_EQ(next_of(c, WSG_CMD_ACK_FAST_STOP, NULL), WSG_E_SUCCESS);
+    CHECK_EQ(next_of(c, WSG_CMD_PREPOSITION, NULL), WSG_E_CMD_PENDING);
+    CHECK_EQ(next_of(c, q[0], &fl), WSG_E_SUCCESS);
+    CHECK_EQ((uint32_t)fl & WSG_SF_FAST_STOP, 0);
+    CHECK_EQ(next_of(c, q[1], &gs), WSG_E_SUCCESS);
+    CHECK_EQ(gs, WSG_GS_POSITIONING);
+
+    /* A power fault from the control channel: when "ok" arrives, the
+     * motion is aborted and FAST STOP shows. */
+    CMD_OK(k, "fault power on");
+    CHECK_EQ(next_of(c, WSG_CMD_PREPOSITION, NULL), WSG_E_CMD_ABORTED);
+    send_batch(c, q, (const void *const[]){NULL, NULL, NULL},
+               (const size_t[]){0, 0, 0}, 3);
+    CHECK_EQ(next_of(c, q[0], &fl), WSG_E_SUCCESS);
+    CHECK(((uint32_t)fl & (WSG_SF_POWER_FAULT | WSG_SF_FAST_STOP)) ==
+          (WSG_SF_POWER_FAULT | WSG_SF_FAST_STOP));
+    CHECK_EQ(next_of(c, q[1], &gs), WSG_E_SUCCESS);
+    CHECK_EQ(gs, WSG_GS_ERROR);
+    CHECK_EQ(next_of(c, q[2], &sp), WSG_E_SUCCESS);
+    CHECK_NEAR(sp, 0.0, 1e-6);
+    CMD_OK(k, "fault power off");
+    CHECK_EQ(emu_request(c, WSG_CMD_ACK_FAST_STOP, ack, 3, NULL, EMU_REPLY_MS),
+             WSG_E_SUCCESS);
+    CHECK_EQ(flags_of(c) & WSG_SF_FAST_STOP, 0);
+    CMD_OK(k, "time resume");
+    emu_drop_kept(c);
+}
+
 static void test_scale(struct emu_client *c, struct ctl *k)
 {
     int st = move_to(c, 10.0f, 400.0f);
@@ -437,9 +602,8 @@ static void test_drop(struct emu *e, struct emu_client *c, struct ctl *k)
     emu_close(c);
 
     REQUIRE(emu_open(&m, e, &emu_tcp) == 0);
-    /* Applied by the model's next step, as for any close without 07h. */
-    CHECK(emu_wait_flags(&m, WSG_SF_FAST_STOP, WSG_SF_FAST_STOP, 1000, NULL) ==
-          0);
+    /* At once, as for any close without 07h: "ok dropped" came after it. */
+    CHECK(flags_of(&m) & WSG_SF_FAST_STOP);
     emu_close(&m);
 }
 
@@ -502,6 +666,7 @@ int main(int argc, char **argv)
     test_lockstep(&c, &k);
     test_part_lost(&c, &k);
     test_faults(&c, &k);
+    test_at_once(&e, &c, &k);
     test_scale(&c, &k);
     test_drop(&e, &c, &k);
     test_reset(&e, &k);
