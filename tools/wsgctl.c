@@ -43,7 +43,9 @@
 /* Set by SIGINT/SIGTERM; a flag, since the handler may do nothing else. */
 static volatile sig_atomic_t interrupted;
 
-enum link_kind { LINK_TCP, LINK_UDP, LINK_SERIAL };
+/* LINK_CONTROL: the emulator's control channel, read only (see
+ * control_read). */
+enum link_kind { LINK_TCP, LINK_UDP, LINK_SERIAL, LINK_CONTROL };
 
 struct opts {
     enum link_kind kind;
@@ -311,6 +313,8 @@ static int conn_open(struct conn *c, const struct opts *o)
         return open_udp(c, o->addr);
     case LINK_SERIAL:
         return open_serial(c, o->addr);
+    case LINK_CONTROL:
+        return open_tcp(c, o->addr, o->timeout_s);
     }
     return -EXIT_USAGE;
 }
@@ -617,11 +621,16 @@ static int print_values(const struct opts *o, uint8_t id, const uint8_t *p,
         if (n != 8)
             return 0;
         sw = wsg_get_u16(p + 2);
-        printf("type %u (%s)\nhardware-revision %u\nfirmware %u.%u.%u\n"
-               "serial-number %lu\n",
-               p[0], p[0] < 7 ? types[p[0]] : "?", p[1], sw >> 12,
-               (sw >> 8) & 15, (sw >> 4) & 15,
-               (unsigned long)wsg_get_u32(p + 4));
+        if (o->quiet) /* TYPE HWREV FIRMWARE SN, like the other readings */
+            printf("%u %u %u.%u.%u %lu\n", p[0], p[1], sw >> 12,
+                   (sw >> 8) & 15, (sw >> 4) & 15,
+                   (unsigned long)wsg_get_u32(p + 4));
+        else
+            printf("type %u (%s)\nhardware-revision %u\nfirmware "
+                   "%u.%u.%u\nserial-number %lu\n",
+                   p[0], p[0] < 7 ? types[p[0]] : "?", p[1], sw >> 12,
+                   (sw >> 8) & 15, (sw >> 4) & 15,
+                   (unsigned long)wsg_get_u32(p + 4));
         return 1;
     }
     case WSG_CMD_GET_DEVICE_TAG:
@@ -674,6 +683,117 @@ static int gripper_error(uint8_t id, unsigned status)
 
 /* ---- commands ---- */
 
+/* The number after "key": in the control channel's state JSON (its keys
+ * are unique, the nested stats' too). */
+static int json_num(const char *json, const char *key, double *v)
+{
+    char pat[32];
+    const char *p;
+    char *end;
+
+    snprintf(pat, sizeof pat, "\"%s\":", key);
+    p = strstr(json, pat);
+    if (!p)
+        return -1;
+    *v = strtod(p + strlen(pat), &end);
+    return end == p + strlen(pat) ? -1 : 0;
+}
+
+/* A reading through the emulator's control channel ("state"), printed as
+ * the gripper's answer would be. Nothing is sent to the gripper, so
+ * nothing happens to it: no 07h at the close (which aborts a running
+ * motion, 3.1.2), no session, no FAST STOP. */
+static int control_read(struct ctx *x, uint8_t id, const uint8_t *payload,
+                        size_t len)
+{
+    char line[2048];
+    size_t n = 0;
+    double deadline = now_ms() + x->o.timeout_s * 1000.0, v[3];
+    uint8_t p[8];
+    size_t np = 4;
+    int ok = 1;
+
+    /* Readings only: 42h's reset flag (stats --reset) changes the
+     * gripper. */
+    if (len && !(id == WSG_CMD_GET_GRASP_STATS && len == 1 && !payload[0])) {
+        err("--control reads only: %02Xh %s with parameters changes the "
+            "gripper",
+            id, cmd_name(id));
+        return EXIT_USAGE;
+    }
+    if (write(x->c.fd, "state\n", 6) != 6) {
+        err("control channel: %s", strerror(errno));
+        return EXIT_CONN;
+    }
+    while (n == 0 || line[n - 1] != '\n') {
+        struct pollfd pfd = {x->c.fd, POLLIN, 0};
+        int ms = (int)(deadline - now_ms());
+        ssize_t k;
+
+        if (ms <= 0 || poll(&pfd, 1, ms) <= 0 || n + 1 >= sizeof line) {
+            err("control channel: no answer to \"state\"");
+            return EXIT_CONN;
+        }
+        k = read(x->c.fd, line + n, sizeof line - 1 - n);
+        if (k <= 0) {
+            err("control channel: closed");
+            return EXIT_CONN;
+        }
+        n += (size_t)k;
+    }
+    line[n - 1] = '\0';
+    if (strncmp(line, "ok {", 4) != 0) {
+        err("control channel: %s", line);
+        return EXIT_CONN;
+    }
+    switch (id) {
+    case WSG_CMD_GET_SYSTEM_STATE:
+        ok = json_num(line, "flags", v) == 0;
+        wsg_put_u32(p, (uint32_t)v[0]);
+        break;
+    case WSG_CMD_GET_GRASP_STATE:
+        ok = json_num(line, "grasp_state", v) == 0;
+        p[0] = (uint8_t)v[0];
+        np = 1;
+        break;
+    case WSG_CMD_GET_WIDTH:
+    case WSG_CMD_GET_SPEED:
+    case WSG_CMD_GET_FORCE:
+        ok = json_num(line,
+                      id == WSG_CMD_GET_WIDTH   ? "width"
+                      : id == WSG_CMD_GET_SPEED ? "speed"
+                                                : "force",
+                      v) == 0;
+        wsg_put_f32(p, (float)v[0]);
+        break;
+    case WSG_CMD_GET_TEMPERATURE:
+        ok = json_num(line, "temperature", v) == 0;
+        wsg_put_u16(
+            p, (uint16_t)(int16_t)(v[0] * 10.0 + (v[0] < 0 ? -0.5 : 0.5)));
+        np = 2;
+        break;
+    case WSG_CMD_GET_GRASP_STATS:
+        ok = json_num(line, "total", v) == 0 &&
+             json_num(line, "no_part", v + 1) == 0 &&
+             json_num(line, "lost_part", v + 2) == 0;
+        wsg_put_u32(p, (uint32_t)v[0]);
+        wsg_put_u16(p + 4, (uint16_t)v[1]);
+        wsg_put_u16(p + 6, (uint16_t)v[2]);
+        np = 8;
+        break;
+    default:
+        err("--control reads only: %02Xh %s is not a reading", id,
+            cmd_name(id));
+        return EXIT_USAGE;
+    }
+    if (!ok) {
+        err("control channel: unexpected state: %s", line);
+        return EXIT_CONN;
+    }
+    print_values(&x->o, id, p, np);
+    return EXIT_OK;
+}
+
 /* A request whose success answer is printed with print_values (or
  * nothing). E_NOT_AVAILABLE on an optional setting (soft limits, tag)
  * prints "none" and is no error when none_ok. */
@@ -681,8 +801,11 @@ static int simple(struct ctx *x, uint8_t id, const uint8_t *payload,
                   size_t len, int none_ok)
 {
     struct reply r;
-    int rc = xact(x, id, payload, len, &r, NULL);
+    int rc;
 
+    if (x->c.kind == LINK_CONTROL)
+        return control_read(x, id, payload, len);
+    rc = xact(x, id, payload, len, &r, NULL);
     if (rc)
         return rc;
     if (none_ok && r.status == WSG_E_NOT_AVAILABLE) {
@@ -1167,6 +1290,66 @@ static long read_hex(FILE *in, uint8_t *buf, size_t cap)
     return (long)n;
 }
 
+/* Could this payload be a reply to ID? A status the manual names first;
+ * with E_SUCCESS, the parameters that ID returns. */
+static int reply_fits(uint8_t id, const uint8_t *payload, size_t size)
+{
+    size_t n = size - 2;
+
+    if (size < 2 ||
+        !strcmp(wsg_status_name(wsg_get_u16(payload)), "E_UNKNOWN"))
+        return 0;
+    if (wsg_get_u16(payload) != WSG_E_SUCCESS)
+        return n == 0;
+    switch (id) {
+    case WSG_CMD_LOOP:
+        return 1; /* the echo: any length */
+    case WSG_CMD_GET_DEVICE_TAG:
+        return n <= WSG_TAG_MAX;
+    case WSG_CMD_GET_ACCELERATION:
+    case WSG_CMD_GET_FORCE_LIMIT:
+    case WSG_CMD_GET_SYSTEM_STATE:
+    case WSG_CMD_GET_WIDTH:
+    case WSG_CMD_GET_SPEED:
+    case WSG_CMD_GET_FORCE:
+        return n == 4;
+    case WSG_CMD_GET_GRASP_STATE:
+        return n == 1;
+    case WSG_CMD_GET_TEMPERATURE:
+        return n == 2;
+    case WSG_CMD_GET_SOFT_LIMITS:
+    case WSG_CMD_GET_GRASP_STATS:
+    case WSG_CMD_GET_SYSTEM_INFO:
+        return n == 8;
+    case WSG_CMD_GET_SYSTEM_LIMITS:
+        return n == 32;
+    default:
+        return n == 0 && wsg_cmd_name(id) != NULL;
+    }
+}
+
+/* "request", "reply", or both where the bytes fit either (a Loop, a
+ * Set Device Tag of two bytes); by the length rules of the command table
+ * and the reply shapes of the manual. */
+static const char *direction(uint8_t id, const uint8_t *payload, size_t size)
+{
+    int req = wsg_cmd_request_fits(id, size);
+    int rep = reply_fits(id, payload, size);
+
+    if (req && rep)
+        return "request or reply";
+    if (rep)
+        return "reply";
+    if (req)
+        return "request";
+    /* Neither: a request the gripper refuses by its length (or an ID it
+     * does not know), unless it leads with a status. */
+    return size >= 2 &&
+                   strcmp(wsg_status_name(wsg_get_u16(payload)), "E_UNKNOWN")
+               ? "reply (unexpected length)"
+               : "request (refused by its length or ID)";
+}
+
 static int c_decode(struct ctx *x, int argc, char **argv)
 {
     const size_t cap = 1u << 20; /* 1 MiB of packets is plenty */
@@ -1223,9 +1406,11 @@ static int c_decode(struct ctx *x, int argc, char **argv)
         }
         const uint8_t *payload = buf + i + 3;
         int ok = wsg_crc_update(WSG_CRC_INIT, buf + start, end - start) == 0;
+        const char *dir = direction(id, payload, size);
+        int is_reply = strncmp(dir, "reply", 5) == 0;
         packets++;
-        printf("%02Xh %s SIZE %u", id, cmd_name(id), size);
-        if (size >= 2 &&
+        printf("%s %02Xh %s SIZE %u", dir, id, cmd_name(id), size);
+        if (strcmp(dir, "request") != 0 && size >= 2 &&
             strcmp(wsg_status_name(wsg_get_u16(payload)), "E_UNKNOWN"))
             printf(" status %s", wsg_status_name(wsg_get_u16(payload)));
         printf(" payload%s", size ? " " : "");
@@ -1234,8 +1419,8 @@ static int c_decode(struct ctx *x, int argc, char **argv)
                ok ? "ok" : "bad");
         if (!ok)
             bad = 1;
-        /* A reply-looking success: its values too, indented. */
-        if (ok && size >= 2 && wsg_get_u16(payload) == WSG_E_SUCCESS &&
+        /* A reply's success: its values too, indented. */
+        if (ok && is_reply && wsg_get_u16(payload) == WSG_E_SUCCESS &&
             size > 2) {
             struct opts o = x->o;
             o.quiet = 0;
@@ -1333,6 +1518,15 @@ static const struct command commands[] = {
 };
 #define NCOMMANDS (sizeof commands / sizeof commands[0])
 
+/* What --control can answer: readings the control channel's "state"
+ * holds. */
+static int control_readable(const struct command *cmd)
+{
+    return cmd->run == c_state || cmd->run == c_width || cmd->run == c_speed ||
+           cmd->run == c_force || cmd->run == c_temperature ||
+           cmd->run == c_stats;
+}
+
 /* A description, indented 6, in lines of at most 78 columns. */
 static void print_wrapped(FILE *f, const char *s)
 {
@@ -1356,7 +1550,8 @@ static void usage(FILE *f)
 {
     fprintf(f,
             "usage: wsgctl [--tcp HOST:PORT | --udp HOST:PORT[:LOCAL] | "
-            "--serial PATH]\n"
+            "--serial PATH |\n"
+            "               --control HOST:PORT]\n"
             "              [--timeout S] [-q|--quiet] COMMAND [ARGS]\n"
             "\n"
             "Client of a WSG 50 gripper (or wsgemu), command set 2.2.0.\n"
@@ -1364,13 +1559,23 @@ static void usage(FILE *f)
             "Interfaces (default --tcp " DEFAULT_TCP "):\n"
             "  --tcp HOST:PORT        every close is announced with 07h, so "
             "wsgctl never\n"
-            "                         puts the gripper into FAST STOP\n"
+            "                         puts the gripper into FAST STOP; but "
+            "07h aborts a\n"
+            "                         running motion (manual 3.1.2), "
+            "another client's too\n"
             "  --udp HOST:PORT[:LOCAL]\n"
             "                         requests to PORT, answers received "
             "on LOCAL\n"
             "                         (default %u, the gripper's remote "
             "port)\n"
             "  --serial PATH          raw 115200 8N1\n"
+            "  --control HOST:PORT    wsgemu's control channel: state, "
+            "width, speed,\n"
+            "                         force, temperature and stats read "
+            "without touching\n"
+            "                         the gripper (no 07h, no session): "
+            "safe while another\n"
+            "                         client moves it\n"
             "Options (anywhere; \"--\" ends them):\n"
             "  --timeout S            wait for an answer (through "
             "E_CMD_PENDING) up to S\n"
@@ -1379,6 +1584,7 @@ static void usage(FILE *f)
             "instead of\n"
             "                         \"width 55.00 mm\"\n"
             "  -h, --help             this text\n"
+            "  -V, --version          wsgctl's version\n"
             "\nCommands:\n",
             DEFAULT_UDP_PORT);
     for (size_t i = 0; i < NCOMMANDS; i++) {
@@ -1425,7 +1631,7 @@ int main(int argc, char **argv)
         double d;
 
         if (opts_done || a[0] != '-' || a[1] == '\0' ||
-            (a[1] != '-' && a[1] != 'q' && a[1] != 'h')) {
+            (a[1] != '-' && a[1] != 'q' && a[1] != 'h' && a[1] != 'V')) {
             /* Negative numbers ("-5") are arguments, not options. */
             if (npos >= (int)(sizeof pos / sizeof pos[0])) {
                 err("too many arguments");
@@ -1439,6 +1645,9 @@ int main(int argc, char **argv)
         } else if (!strcmp(a, "-h") || !strcmp(a, "--help")) {
             usage(stdout);
             return EXIT_OK;
+        } else if (!strcmp(a, "-V") || !strcmp(a, "--version")) {
+            printf("wsgctl %s\n", WSG_VERSION);
+            return EXIT_OK;
         } else if (!strcmp(a, "-q") || !strcmp(a, "--quiet")) {
             x.o.quiet = 1;
         } else if (!strcmp(a, "--relative")) {
@@ -1447,14 +1656,20 @@ int main(int argc, char **argv)
             x.o.stop_on_block = 1;
         } else if (!strcmp(a, "--reset")) {
             x.o.reset = 1;
+        } else if (strcmp(a, "--tcp") && strcmp(a, "--udp") &&
+                   strcmp(a, "--serial") && strcmp(a, "--control") &&
+                   strcmp(a, "--timeout") && strcmp(a, "--count")) {
+            err("unknown option %s (see --help)", a);
+            return EXIT_USAGE;
         } else if (!val) {
             err("%s needs a value (see --help)", a);
             return EXIT_USAGE;
         } else if (!strcmp(a, "--tcp") || !strcmp(a, "--udp") ||
-                   !strcmp(a, "--serial")) {
+                   !strcmp(a, "--serial") || !strcmp(a, "--control")) {
             x.o.kind = a[2] == 't'   ? LINK_TCP
                        : a[2] == 'u' ? LINK_UDP
-                                     : LINK_SERIAL;
+                       : a[2] == 's' ? LINK_SERIAL
+                                     : LINK_CONTROL;
             x.o.addr = val;
             i++;
         } else if (!strcmp(a, "--timeout")) {
@@ -1490,6 +1705,12 @@ int main(int argc, char **argv)
     }
     if (npos - 1 < cmd->min || npos - 1 > cmd->max) {
         err("usage: wsgctl %s %s", cmd->name, cmd->args);
+        return EXIT_USAGE;
+    }
+    if (x.o.kind == LINK_CONTROL && cmd->conn && !control_readable(cmd)) {
+        err("--control reads only (state, width, speed, force, temperature, "
+            "stats); %s needs the gripper's interface",
+            cmd->name);
         return EXIT_USAGE;
     }
 

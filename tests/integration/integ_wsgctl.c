@@ -13,6 +13,12 @@
  * - decode of the manual's example packets in its own notation, split
  *   across lines and with commas, and with a flipped checksum (exit 1);
  * - one command each over UDP and over the serial pty;
+ * - --version; an unknown option is named as unknown, a known one without
+ *   its value as needing one; -q info prints bare values; decode tells a
+ *   request from a reply;
+ * - the 07h of wsgctl's close aborts another client's running motion
+ *   (manual 3.1.2), while --control reads width and state through the
+ *   control channel without touching it;
  * - at the end the gripper is not in FAST STOP: every wsgctl close over
  *   TCP was announced with 07h.
  *
@@ -139,6 +145,12 @@ static void test_usage(struct env *v)
     CHECK_EQ(TCP(v, "raw", "0x06", "bareword"), 2);
     CHECK_EQ(TCP(v, "raw", "300"), 2);
     CHECK_EQ(TCP(v, "--timeout", "soon", "width"), 2);
+    CHECK_EQ(ctl(v, NULL, NULL, "--version", (char *)NULL), 0);
+    CHECK(!strncmp(v->out, "wsgctl ", 7) && count_lines(v->out) == 1);
+    CHECK_EQ(TCP(v, "--frobnicate", "width"), 2);
+    CHECK(has(v->err, "unknown option --frobnicate"));
+    CHECK_EQ(TCP(v, "width", "--timeout"), 2);
+    CHECK(has(v->err, "--timeout needs a value"));
     CHECK_EQ(ctl(v, "--udp", "nohostport", "width", (char *)NULL), 2);
 }
 
@@ -194,6 +206,8 @@ static void test_tcp(struct env *v)
 
     CHECK_EQ(TCP(v, "info"), 0);
     CHECK(has(v->out, "type 1 (WSG 50)") && has(v->out, "firmware 2.2.0"));
+    CHECK_EQ(TCP(v, "-q", "info"), 0); /* TYPE HWREV FIRMWARE SN */
+    CHECK(!strcmp(v->out, "1 1 2.2.0 1\n"));
     CHECK_EQ(TCP(v, "limits"), 0);
     CHECK(has(v->out, "stroke 110.00 mm"));
 
@@ -249,11 +263,21 @@ static void test_decode(struct env *v)
                       "\"$WSGCTL\" decode"),
              0);
     CHECK_EQ(count_lines(v->out), 5);
-    CHECK(has(v->out, "01h (unknown ID) SIZE 0 payload checksum E8 10 ok"));
-    CHECK(has(v->out, "20h Homing SIZE 2 status E_SUCCESS payload 00 00 "
-                      "checksum B3 FD ok"));
-    CHECK(has(v->out, "90h (unknown ID) SIZE 2 status E_CMD_UNKNOWN"));
-    CHECK(has(v->out, "status E_CMD_PENDING"));
+    CHECK(has(v->out, "request (refused by its length or ID) 01h (unknown "
+                      "ID) SIZE 0 payload checksum E8 10 ok"));
+    CHECK(has(v->out, "reply 20h Homing SIZE 2 status E_SUCCESS payload "
+                      "00 00 checksum B3 FD ok"));
+    CHECK(has(v->out, "reply 90h (unknown ID) SIZE 2 status E_CMD_UNKNOWN"));
+    CHECK(has(v->out, "reply 21h Preposition SIZE 2 status E_CMD_PENDING"));
+    /* Requests: Homing with its direction byte, Get Opening Width with no
+     * payload; a Loop fits both. */
+    CHECK_EQ(shell(v, "echo 'AA AA AA 20 01 00 00 8F 83 "
+                      "AA AA AA 43 00 00 BD 54' | \"$WSGCTL\" decode"),
+             0);
+    CHECK(has(v->out, "request 20h Homing SIZE 1 payload 00 checksum"));
+    CHECK(has(v->out, "request 43h GetOpeningWidth SIZE 0 payload "
+                      "checksum BD 54 ok"));
+    CHECK(!has(v->out, "status"));
     /* The Get Acceleration reply as it really is (see NOTES), with commas
      * and 0x: the values are decoded. */
     CHECK_EQ(shell(v, "echo '0xAA,0xAA,0xAA,0x31,0x06,0x00,0x00,0x00,"
@@ -319,6 +343,44 @@ static void test_udp_pty(struct env *v)
 }
 
 /* Every wsgctl close over TCP was announced: no FAST STOP. */
+/* A slow motion by another client: wsgctl's 07h at its close aborts it
+ * (3.1.2: any movement running when the announcement arrives), --control
+ * reads beside it without a trace. */
+static void test_control_read(struct env *v, struct emu *e)
+{
+    struct emu_client c;
+    struct emu_frame f;
+    uint8_t p[16];
+    size_t n = emu_move_payload(p, 0, 5.0f, 5.0f);
+    char addr[64];
+
+    REQUIRE(emu_field(e, "control", addr, sizeof addr) != NULL);
+    REQUIRE(emu_open(&c, e, &emu_tcp) == 0);
+    REQUIRE(emu_request(&c, WSG_CMD_PREPOSITION, p, n, NULL, EMU_REPLY_MS) ==
+            WSG_E_CMD_PENDING);
+    CHECK_EQ(ctl(v, "--control", addr, "state", (char *)NULL), 0);
+    CHECK(has(v->out, "SF_MOVING") && has(v->out, "grasp 6 POSITIONING"));
+    CHECK_EQ(ctl(v, "--control", addr, "-q", "width", (char *)NULL), 0);
+    CHECK(atof(v->out) > 5.0 && atof(v->out) < 60.0);
+    CHECK_EQ(ctl(v, "--control", addr, "-q", "stats", (char *)NULL), 0);
+    CHECK(!strcmp(v->out, "1 1 0\n"));
+    CHECK_EQ(ctl(v, "--control", addr, "temperature", (char *)NULL), 0);
+    CHECK(!strcmp(v->out, "temperature 25.0 degC\n"));
+    /* Nothing but readings: no motion, no reset of the statistics. */
+    CHECK_EQ(ctl(v, "--control", addr, "home", (char *)NULL), 2);
+    CHECK(has(v->err, "reads only"));
+    CHECK_EQ(ctl(v, "--control", addr, "stats", "--reset", (char *)NULL), 2);
+    /* Still moving: nothing was sent to the gripper. */
+    CHECK_EQ(emu_recv_id(&c, WSG_CMD_PREPOSITION, &f, 100), 0);
+    /* A reading over TCP: its close's 07h ends the motion. */
+    CHECK_EQ(TCP(v, "width"), 0);
+    CHECK_EQ(emu_recv_id(&c, WSG_CMD_PREPOSITION, &f, EMU_REPLY_MS), 1);
+    CHECK_EQ(f.status, WSG_E_CMD_ABORTED);
+    CHECK_EQ(emu_request(&c, WSG_CMD_DISCONNECT, NULL, 0, NULL, EMU_REPLY_MS),
+             WSG_E_SUCCESS);
+    emu_close(&c);
+}
+
 static void check_no_fast_stop(struct emu *e)
 {
     struct emu_client c;
@@ -339,7 +401,7 @@ int main(int argc, char **argv)
     static struct env v; /* big buffers: not on the stack */
     struct emu e;
     char udp_daemon[64], dir[64] = "/tmp/wsgctl-pty-XXXXXX", field[128];
-    const char *args[8];
+    const char *args[10];
     unsigned rport = free_port(SOCK_DGRAM);
     int n = 0, m;
 
@@ -355,6 +417,8 @@ int main(int argc, char **argv)
     args[n++] = "127.0.0.1:0";
     args[n++] = "--udp";
     args[n++] = udp_daemon;
+    args[n++] = "--control";
+    args[n++] = "127.0.0.1:0";
     m = posix_openpt(O_RDWR | O_NOCTTY);
     if (m >= 0 && mkdtemp(dir)) {
         close(m);
@@ -381,6 +445,7 @@ int main(int argc, char **argv)
     /* raw moved to 55 mm */
     test_watch(&v);
     test_udp_pty(&v);
+    test_control_read(&v, &e);
     check_no_fast_stop(&e);
 
     CHECK_EQ(emu_stop(&e), 0);
