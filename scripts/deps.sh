@@ -7,6 +7,17 @@ set -eu
 pkgs="cmake make gcc libc6-dev"
 # The memcheck test (tests/memcheck.sh) runs the daemon under valgrind.
 pkgs="$pkgs valgrind"
+# The .deb and its test (tests/package/run.sh): CPack's Depends come from
+# dpkg-shlibdeps (dpkg-dev), which CPack feeds the programs it finds with
+# file; man renders the man pages and systemd-analyze verifies the unit.
+pkgs="$pkgs dpkg-dev file man-db systemd"
+# The container image (scripts/container.sh, tests/container/run.sh):
+# podman builds and runs it; runc because crun refuses a cgroup v1/v2
+# hybrid; ip brings up loopback where the test runs the exported rootfs.
+pkgs="$pkgs podman runc iproute2"
+# The Python client's tests (tests/python/run.sh): Debian's python3 makes a
+# venv that sees the system pytest, and pip installs python/ into it offline.
+pkgs="$pkgs python3 python3-venv python3-pytest"
 # The CAN tests (tests/can/run.sh): where the host kernel has no vcan, QEMU
 # boots Debian's kernel with it; xz unpacks that kernel, iproute2's ip and
 # tc make the buses. The kernel and busybox themselves are only downloaded,

@@ -1,0 +1,418 @@
+#!/bin/bash
+# run.sh: test what users install, the way they install it:
+#   1. `cmake --install BUILD --prefix SCRATCH`: every file is there (the
+#      two programs, the man pages, the config file and its example, the
+#      systemd unit, the docs), the benchmark tools are not; the man pages
+#      render without warnings (where man is installed); the installed
+#      wsgemu serves and the installed wsgctl talks to it; the installed
+#      config file starts it, and so does a copy with every example setting
+#      of it uncommented (but `can`, which needs a SocketCAN interface),
+#      whose values the gripper then shows; a bad line in it is refused.
+#   2. the .deb from cpack: its fields (name, version, architecture,
+#      dependencies, conffiles) and its files; dpkg installs it into a
+#      scratch root with a database of its own, the installed wsgemu
+#      serves with the installed config, wsgctl talks to it; dpkg purges
+#      it without leaving a file behind.
+#   3. `systemd-analyze verify` on the installed unit, with the installed
+#      man pages (Documentation=man:wsgemu(1)); where there is no
+#      systemd-analyze this step alone is skipped. The .deb's unit must be
+#      the same but for the /usr paths in ExecStart.
+# Every emulator started here listens on free ports (port 0) only.
+#
+# Usage: run.sh CMAKE CPACK BUILD_DIR SOURCE_DIR VERSION
+# Exit status: 0 passed, 1 a check failed, 2 usage, 77 no dpkg here
+#   (skipped).
+set -eu
+
+ME=run.sh
+[ $# = 5 ] || {
+    echo "usage: $ME CMAKE CPACK BUILD_DIR SOURCE_DIR VERSION" >&2
+    exit 2
+}
+CMAKE=$1
+CPACK=$2
+BUILD=$3
+SRC=$4
+VERSION=$5
+
+for p in dpkg dpkg-deb; do
+    if ! command -v "$p" >/dev/null 2>&1; then
+        echo "$ME: no $p here (not a Debian system?): skipped"
+        exit 77
+    fi
+done
+
+S=$(mktemp -d "${TMPDIR:-/tmp}/wsgemu-package.XXXXXX")
+EMU_PID=
+# shellcheck disable=SC2317 # run by the EXIT trap
+cleanup() {
+    # Only the emulator this script started, by its PID.
+    if [ -n "$EMU_PID" ]; then
+        kill "$EMU_PID" 2>/dev/null || true
+        wait "$EMU_PID" 2>/dev/null || true
+    fi
+    rm -rf "$S"
+}
+trap cleanup EXIT
+trap 'exit 1' INT TERM
+
+check() { echo "--- $*"; }
+fail() {
+    echo "FAIL: $*" >&2
+    exit 1
+}
+# show FILE: a command's output, for a failure's context.
+show() { sed 's/^/    | /' "$1" >&2; }
+
+# start_emu NAME EXE ARGS...: start an emulator, wait up to 10 s for its
+# ready line; sets EMU_PID and READY. Its output is in $S/NAME.out/.err.
+start_emu() {
+    local name=$1 i=0
+    shift
+    READY=
+    "$@" >"$S/$name.out" 2>"$S/$name.err" </dev/null &
+    EMU_PID=$!
+    while [ $i -lt 100 ]; do
+        # A whole line: it is written with its newline and flushed.
+        if [ "$(wc -l <"$S/$name.out")" -ge 1 ]; then
+            READY=$(head -n 1 "$S/$name.out")
+            case $READY in ready\ *) return 0 ;; esac
+        fi
+        if ! kill -0 "$EMU_PID" 2>/dev/null; then
+            local st=0
+            wait "$EMU_PID" || st=$?
+            EMU_PID=
+            show "$S/$name.err"
+            fail "$name: '$*' ended with status $st before its ready line"
+        fi
+        sleep 0.1
+        i=$((i + 1))
+    done
+    show "$S/$name.err"
+    fail "$name: no ready line within 10 s from '$*' (stdout: '$READY')"
+}
+
+# stop_emu NAME: SIGTERM must end the emulator with status 0.
+stop_emu() {
+    local st=0
+    kill -TERM "$EMU_PID"
+    wait "$EMU_PID" || st=$?
+    EMU_PID=
+    if [ "$st" != 0 ]; then
+        show "$S/$1.err"
+        fail "$1: SIGTERM ended the emulator with status $st, not 0"
+    fi
+    echo "    stopped by SIGTERM, status 0"
+}
+
+# tcp_port: the TCP port of the ready line (one gripper).
+tcp_port() {
+    local p=${READY#*tcp=127.0.0.1:}
+    p=${p%%[ ,]*}
+    case $p in '' | *[!0-9]*) fail "no TCP port in the ready line '$READY'" ;; esac
+    echo "$p"
+}
+
+# ctl WSGCTL PORT ARGS...: wsgctl against the emulator; its output in
+# $S/ctl.out, failing unless it ends with status 0.
+ctl() {
+    local exe=$1 port=$2 st=0
+    shift 2
+    timeout 30 "$exe" --tcp "127.0.0.1:$port" --timeout 10 "$@" \
+        >"$S/ctl.out" 2>&1 || st=$?
+    if [ "$st" != 0 ]; then
+        show "$S/ctl.out"
+        fail "wsgctl $* ended with status $st"
+    fi
+}
+
+# talk WSGCTL PORT: info, home, width: a fresh gripper, homed, opens to its
+# full stroke (110 mm for the default WSG 50).
+talk() {
+    check "wsgctl info: a WSG 50 with firmware 2.2.0"
+    ctl "$1" "$2" info
+    grep -q '^firmware 2\.2\.0$' "$S/ctl.out" ||
+        { show "$S/ctl.out"; fail "wsgctl info does not show firmware 2.2.0"; }
+    check "wsgctl home: E_SUCCESS"
+    ctl "$1" "$2" home
+    check "wsgctl -q width after homing: 110.00"
+    ctl "$1" "$2" -q width
+    [ "$(cat "$S/ctl.out")" = 110.00 ] ||
+        { show "$S/ctl.out"; fail "width after homing is not 110.00"; }
+}
+
+# version EXE NAME: --version prints exactly `NAME VERSION`.
+version() {
+    local exe=$1 name=$2 st=0 out
+    check "$name --version prints '$name $VERSION'"
+    out=$("$exe" --version 2>&1) || st=$?
+    [ "$st" = 0 ] || fail "$name --version ended with status $st: $out"
+    [ "$out" = "$name $VERSION" ] ||
+        fail "$name --version printed '$out', not '$name $VERSION'"
+}
+
+# has_files ROOT PATH...: each PATH is a file below ROOT.
+has_files() {
+    local root=$1 missing=""
+    shift
+    for f in "$@"; do
+        [ -f "$root/$f" ] || missing="$missing $f"
+    done
+    [ -z "$missing" ] || fail "missing below $root:$missing"
+}
+
+# ===================================================================
+echo "=== 1. cmake --install into a scratch prefix"
+P=$S/prefix
+check "cmake --install $BUILD --prefix $P"
+"$CMAKE" --install "$BUILD" --prefix "$P" >"$S/install.log" 2>&1 ||
+    { show "$S/install.log"; fail "cmake --install failed"; }
+
+DOC=share/doc/wsgemu
+check "every file is installed"
+has_files "$P" bin/wsgemu bin/wsgctl \
+    etc/wsgemu/wsgemu.conf "$DOC/examples/wsgemu.conf" \
+    lib/systemd/system/wsgemu.service \
+    "$DOC/LICENSE" "$DOC/copyright" "$DOC/README.md"
+for b in wsgemu wsgctl; do
+    [ -x "$P/bin/$b" ] || fail "$P/bin/$b is not executable"
+done
+# Man pages: gzipped where the build had gzip, else as they are.
+for m in wsgemu wsgctl; do
+    if [ -f "$P/share/man/man1/$m.1.gz" ]; then
+        gzip -dc "$P/share/man/man1/$m.1.gz" >"$S/$m.1"
+    elif [ -f "$P/share/man/man1/$m.1" ]; then
+        cp "$P/share/man/man1/$m.1" "$S/$m.1"
+    else
+        fail "no man page $P/share/man/man1/$m.1(.gz)"
+    fi
+    cmp -s "$S/$m.1" "$SRC/docs/man/$m.1" ||
+        fail "the installed $m.1 differs from docs/man/$m.1"
+done
+check "the installed config, its example, LICENSE, README are the sources"
+for pair in "etc/wsgemu/wsgemu.conf packaging/wsgemu.conf" \
+    "$DOC/examples/wsgemu.conf packaging/wsgemu.conf" \
+    "$DOC/LICENSE LICENSE" "$DOC/copyright LICENSE" \
+    "$DOC/README.md README.md"; do
+    # shellcheck disable=SC2086 # two words: installed path, source path
+    set -- $pair
+    cmp -s "$P/$1" "$SRC/$2" || fail "$P/$1 differs from $2"
+done
+check "the benchmark tools are not installed"
+for b in wsgbench wsgref; do
+    [ ! -e "$P/bin/$b" ] || fail "$P/bin/$b is installed"
+done
+check "the unit starts this prefix's wsgemu with this prefix's config"
+want="ExecStart=$P/bin/wsgemu --config $P/etc/wsgemu/wsgemu.conf"
+grep -qxF "$want" "$P/lib/systemd/system/wsgemu.service" ||
+    fail "no line '$want' in the installed unit"
+
+if command -v man >/dev/null 2>&1; then
+    for m in wsgemu wsgctl; do
+        check "man page $m(1) renders without warnings"
+        LC_ALL=C.UTF-8 MANWIDTH=80 man --warnings -l "$S/$m.1" \
+            >"$S/man.out" 2>"$S/man.err" ||
+            { show "$S/man.err"; fail "man -l $m.1 failed"; }
+        [ ! -s "$S/man.err" ] || { show "$S/man.err"; fail "$m.1: warnings"; }
+        grep -q "^NAME" "$S/man.out" || fail "$m.1 renders without NAME"
+        grep -q "^ *$m - " "$S/man.out" || fail "$m.1: no '$m - ...' line"
+    done
+else
+    check "no man here: the man pages are not rendered (skipped)"
+fi
+
+version "$P/bin/wsgemu" wsgemu
+version "$P/bin/wsgctl" wsgctl
+
+check "the installed wsgemu serves TCP on a free port"
+start_emu plain "$P/bin/wsgemu" --tcp 127.0.0.1:0
+echo "    $READY"
+port=$(tcp_port)
+talk "$P/bin/wsgctl" "$port"
+stop_emu plain
+
+# The config file as installed; the command line overrides its ports.
+check "wsgemu --config $P/etc/wsgemu/wsgemu.conf (free ports) starts"
+start_emu conf "$P/bin/wsgemu" --config "$P/etc/wsgemu/wsgemu.conf" \
+    --tcp 127.0.0.1:0 --udp 127.0.0.1:0:1501
+echo "    $READY"
+case $READY in
+*udp=127.0.0.1:*'>1501'*) ;;
+*) fail "the ready line has no UDP answering to 1501: '$READY'" ;;
+esac
+ctl "$P/bin/wsgctl" "$(tcp_port)" -q width
+stop_emu conf
+
+# Every setting the example shows, uncommented (lines "#key = value"),
+# but the CAN interface; the file system's and the network's are
+# overridden on the command line. The values must show in the gripper.
+check "the example config with every setting uncommented (but can) starts"
+sed -e 's/^#\([a-z-]* = \)/\1/' -e '/^can = /d' \
+    "$P/$DOC/examples/wsgemu.conf" >"$S/all.conf"
+n=$(grep -c '^[a-z-]* = ' "$S/all.conf") || true
+[ "$n" -ge 20 ] || fail "only $n settings in the uncommented example"
+echo "    $n settings"
+start_emu all "$P/bin/wsgemu" --config "$S/all.conf" \
+    --tcp 127.0.0.1:0 --udp 127.0.0.1:0:1501 --pty "$S/tty" \
+    --control 127.0.0.1:0 --log "$S/comm.log"
+echo "    $READY"
+case $READY in
+*" pty=$S/tty"*" control=127.0.0.1:"*) ;;
+*) fail "the ready line lacks the pty or the control channel: '$READY'" ;;
+esac
+check "the example's tag and model hold: tag 'cell 4', WSG 50"
+ctl "$P/bin/wsgctl" "$(tcp_port)" -q tag
+[ "$(cat "$S/ctl.out")" = "cell 4" ] ||
+    { show "$S/ctl.out"; fail "the tag is not 'cell 4' from the config"; }
+ctl "$P/bin/wsgctl" "$(tcp_port)" info
+grep -q 'WSG 50' "$S/ctl.out" || { show "$S/ctl.out"; fail "not a WSG 50"; }
+stop_emu all
+[ -s "$S/comm.log" ] || fail "the communication log is empty"
+
+check "a bad line in the config file: status 2, naming file and line"
+cp "$S/all.conf" "$S/bad.conf"
+echo "accelerashun = 200" >>"$S/bad.conf"
+line=$(wc -l <"$S/bad.conf")
+st=0
+"$P/bin/wsgemu" --config "$S/bad.conf" --tcp 127.0.0.1:0 \
+    >"$S/bad.out" 2>&1 </dev/null || st=$?
+[ "$st" = 2 ] || { show "$S/bad.out"; fail "status $st, not 2"; }
+grep -qF "$S/bad.conf:$line" "$S/bad.out" ||
+    { show "$S/bad.out"; fail "the message does not name $S/bad.conf:$line"; }
+
+# ===================================================================
+echo "=== 2. the Debian package"
+check "cpack --config $BUILD/CPackConfig.cmake"
+"$CPACK" --config "$BUILD/CPackConfig.cmake" -B "$S/deb" \
+    >"$S/cpack.log" 2>&1 || { show "$S/cpack.log"; fail "cpack failed"; }
+arch=$(dpkg --print-architecture)
+DEB=$S/deb/wsgemu_${VERSION}_$arch.deb
+[ -f "$DEB" ] || { ls -l "$S/deb" >&2; fail "no $DEB"; }
+echo "    $(basename "$DEB")"
+
+check "control fields: Package, Version, Architecture, Section, Maintainer"
+field() { dpkg-deb -f "$DEB" "$1"; }
+[ "$(field Package)" = wsgemu ] || fail "Package is '$(field Package)'"
+[ "$(field Version)" = "$VERSION" ] || fail "Version is '$(field Version)'"
+[ "$(field Architecture)" = "$arch" ] ||
+    fail "Architecture is '$(field Architecture)', not $arch"
+[ -n "$(field Section)" ] || fail "no Section"
+[ -n "$(field Maintainer)" ] || fail "no Maintainer"
+[ -n "$(field Description)" ] || fail "no Description"
+deps=$(field Depends)
+echo "    Depends: $deps"
+# A dynamically linked program needs libc6 (a static one, -DWSG_STATIC=ON,
+# needs nothing).
+if ldd "$P/bin/wsgemu" >/dev/null 2>&1; then
+    check "Depends names libc6, and this machine has what it names"
+    case ", $deps" in *", libc6"*) ;; *) fail "Depends has no libc6: '$deps'" ;; esac
+else
+    check "static programs: this machine has what Depends names, if anything"
+fi
+# Each "name (op version)"; an alternative ("a | b") is not expected.
+while read -r d; do
+    [ -n "$d" ] || continue
+    case $d in *'|'*) fail "unexpected alternative in Depends: $d" ;; esac
+    name=${d%% *}
+    have=$(dpkg-query -W -f='${Version}' "$name" 2>/dev/null) ||
+        fail "Depends: $name is not installed here"
+    case $d in
+    *'('*)
+        rel=${d#*(}
+        rel=${rel%)}
+        op=${rel%% *}
+        ver=${rel#* }
+        case $op in
+        '>=') dop=ge ;; '<=') dop=le ;; '>>') dop=gt ;; '<<') dop=lt ;;
+        '=') dop=eq ;; *) fail "Depends: unknown relation in '$d'" ;;
+        esac
+        dpkg --compare-versions "$have" "$dop" "$ver" ||
+            fail "Depends: $d, but this machine has $name $have"
+        ;;
+    esac
+done <<EOF
+$(echo "$deps" | tr ',' '\n')
+EOF
+check "conffiles: /etc/wsgemu/wsgemu.conf"
+dpkg-deb -I "$DEB" conffiles >"$S/conffiles" 2>&1 ||
+    { show "$S/conffiles"; fail "the package has no conffiles"; }
+grep -qx /etc/wsgemu/wsgemu.conf "$S/conffiles" ||
+    { show "$S/conffiles"; fail "/etc/wsgemu/wsgemu.conf is no conffile"; }
+
+check "the package's files"
+dpkg-deb -c "$DEB" | awk '{ print $NF }' | sed 's|^\./|/|' >"$S/files"
+missing=""
+for f in /usr/bin/wsgemu /usr/bin/wsgctl \
+    /usr/share/man/man1/wsgemu.1.gz /usr/share/man/man1/wsgctl.1.gz \
+    /etc/wsgemu/wsgemu.conf /usr/share/doc/wsgemu/examples/wsgemu.conf \
+    /usr/lib/systemd/system/wsgemu.service /usr/share/doc/wsgemu/copyright \
+    /usr/share/doc/wsgemu/LICENSE /usr/share/doc/wsgemu/README.md; do
+    grep -qxF "$f" "$S/files" || missing="$missing $f"
+done
+[ -z "$missing" ] || { show "$S/files"; fail "not in the package:$missing"; }
+if grep -q 'wsgbench\|wsgref' "$S/files"; then
+    fail "the benchmark tools are in the package"
+fi
+
+# A root of its own with an empty dpkg database: nothing on this machine
+# is touched. The database knows no libc6, hence --force-depends (the
+# dependencies were checked against this machine above). dpkg wants
+# ldconfig and start-stop-daemon on its PATH, which may lack the sbin
+# directories when not root.
+R=$S/root
+mkdir -p "$R/var/lib/dpkg/info" "$R/var/lib/dpkg/updates"
+: >"$R/var/lib/dpkg/status"
+DPKG="dpkg --root=$R --log=/dev/null --force-not-root --force-depends"
+export PATH="$PATH:/usr/local/sbin:/usr/sbin:/sbin"
+check "dpkg -i into the scratch root $R"
+# shellcheck disable=SC2086
+$DPKG -i "$DEB" >"$S/dpkg.log" 2>&1 || { show "$S/dpkg.log"; fail "dpkg -i"; }
+st=$(dpkg --root="$R" -s wsgemu 2>/dev/null | sed -n 's/^Status: //p')
+[ "$st" = "install ok installed" ] || fail "dpkg says wsgemu is '$st'"
+v=$(dpkg --root="$R" -s wsgemu | sed -n 's/^Version: //p')
+[ "$v" = "$VERSION" ] || fail "dpkg says version '$v', not $VERSION"
+has_files "$R" usr/bin/wsgemu usr/bin/wsgctl etc/wsgemu/wsgemu.conf \
+    usr/lib/systemd/system/wsgemu.service usr/share/doc/wsgemu/copyright
+check "the package's unit: ExecStart with /usr/bin and /etc"
+grep -qxF "ExecStart=/usr/bin/wsgemu --config /etc/wsgemu/wsgemu.conf" \
+    "$R/usr/lib/systemd/system/wsgemu.service" ||
+    fail "the package's unit has not the /usr paths in ExecStart"
+cp "$R/usr/lib/systemd/system/wsgemu.service" "$S/deb.service"
+
+version "$R/usr/bin/wsgemu" wsgemu
+version "$R/usr/bin/wsgctl" wsgctl
+check "the package's wsgemu serves with the package's config (free ports)"
+start_emu deb "$R/usr/bin/wsgemu" --config "$R/etc/wsgemu/wsgemu.conf" \
+    --tcp 127.0.0.1:0 --udp 127.0.0.1:0:1501
+echo "    $READY"
+talk "$R/usr/bin/wsgctl" "$(tcp_port)"
+stop_emu deb
+
+check "dpkg --purge leaves no file of the package"
+# shellcheck disable=SC2086
+$DPKG --purge wsgemu >"$S/dpkg.log" 2>&1 ||
+    { show "$S/dpkg.log"; fail "dpkg --purge"; }
+left=$(cd "$R" && find . -path ./var/lib/dpkg -prune -o ! -type d -print)
+[ -z "$left" ] || fail "left after the purge: $left"
+
+# ===================================================================
+echo "=== 3. the systemd unit"
+if command -v systemd-analyze >/dev/null 2>&1; then
+    check "systemd-analyze verify (installed man pages for Documentation=)"
+    st=0
+    MANPATH=$P/share/man systemd-analyze verify \
+        "$P/lib/systemd/system/wsgemu.service" >"$S/verify.out" 2>&1 || st=$?
+    # It reports an unknown key or a bad value, but exits 0 for it.
+    if [ "$st" != 0 ] || [ -s "$S/verify.out" ]; then
+        show "$S/verify.out"
+        fail "systemd-analyze verify: status $st, or it reported something"
+    fi
+else
+    check "no systemd-analyze here: the unit is not verified (skipped)"
+fi
+check "the package's unit is the verified one but for ExecStart's paths"
+grep -v '^ExecStart=' "$P/lib/systemd/system/wsgemu.service" >"$S/unit.prefix"
+grep -v '^ExecStart=' "$S/deb.service" >"$S/unit.deb"
+diff "$S/unit.prefix" "$S/unit.deb" >&2 ||
+    fail "the package's unit differs from the installed one"
+echo "package: all checks passed"
