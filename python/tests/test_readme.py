@@ -1,0 +1,36 @@
+"""The examples of python/README.md run as written (the daemon's path put
+in), so the package's documentation cannot drift from what it does."""
+
+import os
+import re
+
+README = os.path.join(os.path.dirname(os.path.dirname(
+    os.path.abspath(__file__))), "README.md")
+
+
+def _blocks(lang):
+    with open(README, encoding="utf-8") as f:
+        text = f.read()
+    return re.findall(r"```%s\n(.*?)```" % lang, text, re.S)
+
+
+def test_client_example(wsgemu_binary, capsys):
+    [code] = [b for b in _blocks("python") if "with Emulator(" in b]
+    code = code.replace('"build/wsgemu"', repr(wsgemu_binary))
+    exec(compile(code, README, "exec"), {})
+    out = capsys.readouterr().out.split("\n")
+    assert out[0] == "E_NOT_INITIALIZED"
+    width, force = (float(v) for v in out[1].split())
+    assert (round(width, 2), round(force, 2)) == (39.2, 40.0)
+
+
+def test_fixture_examples(pytester, wsgemu_binary):
+    [code] = [b for b in _blocks("python") if "(wsgemu)" in b]
+    [ini] = _blocks("ini")
+    pytester.makepyfile(test_readme_example=code)
+    # The block's first line is "# pytest.ini".
+    pytester.makefile(".ini", pytest=ini.split("\n", 1)[1])
+    result = pytester.runpytest("-p", "no:cacheprovider",
+                                "--wsgemu=" + wsgemu_binary)
+    result.assert_outcomes(passed=code.count("\ndef test_"))
+    assert code.count("\ndef test_") == 3

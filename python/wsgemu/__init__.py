@@ -1,0 +1,24 @@
+"""wsgemu: a Python client of the WSG gripper protocol and of the wsgemu
+emulator's control channel, and a pytest plugin that runs the emulator.
+
+- ``Gripper``: the WSG command set over TCP or UDP in human units;
+- ``Control``: wsgemu's control channel (parts, faults, simulated time);
+- ``Emulator``: start and stop a wsgemu daemon on free ports;
+- the ``wsgemu`` pytest fixture (``wsgemu.plugin``), loaded automatically.
+"""
+
+from .client import (Cmd, Control, ControlError, Frame, FrameParser,
+                     GraspState, GraspStats, Gripper, Pending, Reply, Status,
+                     SystemFlag, SystemInfo, SystemLimits, WsgError,
+                     WsgTimeout, crc16, encode_frame, status_name)
+from .daemon import DaemonError, Emulator, find_binary, parse_ready_line
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "Cmd", "Control", "ControlError", "DaemonError", "Emulator", "Frame",
+    "FrameParser", "GraspState", "GraspStats", "Gripper", "Pending", "Reply",
+    "Status", "SystemFlag", "SystemInfo", "SystemLimits", "WsgError",
+    "WsgTimeout", "crc16", "encode_frame", "find_binary", "parse_ready_line",
+    "status_name",
+]

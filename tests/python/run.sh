@@ -1,0 +1,58 @@
+#!/bin/bash
+# run.sh: the Python package's tests against a build's daemon. Makes a venv
+# with Debian's python3 that sees the system's pytest (python3-pytest), runs
+# `pip install PYDIR` into it, as a user would, and runs PYDIR/tests with the
+# daemon given. pip needs no package index: the package builds with its own
+# stdlib-only backend (python/_backend). Debian's /usr/bin/python3, not the
+# first python3 on PATH: that may be another installation without the
+# system's pytest.
+#
+# Usage: run.sh WSGEMU PYDIR VENV [PYTEST_ARGS...]
+# Exit status: pytest's (0 all passed), 1 a setup step failed, 77 no
+#   Debian python3 with venv and pytest here (scripts/deps.sh installs them).
+set -u
+
+if [ $# -lt 3 ]; then
+    echo "usage: run.sh WSGEMU PYDIR VENV [PYTEST_ARGS...]" >&2
+    exit 1
+fi
+wsgemu=$1
+pydir=$2
+venv=$3
+shift 3
+
+py=/usr/bin/python3
+if [ ! -x "$py" ]; then
+    echo "run.sh: skipped: no $py (apt-get install python3)"
+    exit 77
+fi
+for mod in venv ensurepip pytest; do
+    if ! "$py" -c "import $mod" 2>/dev/null; then
+        echo "run.sh: skipped: $py has no module $mod" \
+             "(scripts/deps.sh installs python3-venv python3-pytest)"
+        exit 77
+    fi
+done
+
+# Nothing written into the source tree: no bytecode caches, no
+# .pytest_cache.
+export PYTHONDONTWRITEBYTECODE=1
+# Never ask, never reach for an index, and not wait on one either.
+export PIP_NO_INPUT=1 PIP_DISABLE_PIP_VERSION_CHECK=1
+
+# A new venv each run: what is tested is a fresh install of these sources.
+if ! "$py" -m venv --clear --system-site-packages "$venv"; then
+    echo "run.sh: cannot make the venv $venv" >&2
+    exit 1
+fi
+if ! "$venv/bin/python" -m pip install --no-index --quiet "$pydir"; then
+    echo "run.sh: pip install $pydir failed" >&2
+    exit 1
+fi
+
+# The tests import the installed package: run from outside the source
+# tree, so python/ itself is not on sys.path. --wsgemu=PATH in one word,
+# or pytest would take the binary for a path to test.
+cd "$venv" || exit 1
+exec "$venv/bin/python" -m pytest -p no:cacheprovider -q -rs \
+    --rootdir "$pydir/tests" "--wsgemu=$wsgemu" "$@" "$pydir/tests"
