@@ -31,6 +31,7 @@
  */
 #define _GNU_SOURCE /* sched_setaffinity, pipe2, cfmakeraw, prctl */
 
+#include "ctljson.h"
 #include "wsg/proto.h"
 
 #include <arpa/inet.h>
@@ -855,21 +856,6 @@ static int ctl_cmd(struct link *l, const char *cmd, char *out, size_t cap)
     }
 }
 
-/* "key":NUMBER in a JSON line. 0 or -1. */
-static int json_num(const char *s, const char *key, double *v)
-{
-    char pat[32];
-    const char *p;
-    char *end;
-
-    snprintf(pat, sizeof pat, "\"%s\":", key);
-    p = strstr(s, pat);
-    if (!p)
-        return -1;
-    *v = strtod(p + strlen(pat), &end);
-    return end == p + strlen(pat) ? -1 : 0;
-}
-
 /* The control channel's stats: model steps and overruns since start. */
 static int ctl_stats(struct link *ctl, double *steps, double *overruns)
 {
@@ -877,8 +863,9 @@ static int ctl_stats(struct link *ctl, double *steps, double *overruns)
 
     if (ctl_cmd(ctl, "stats", line, sizeof line) < 0)
         return -1;
-    if (strncmp(line, "ok {", 4) != 0 || json_num(line, "steps", steps) < 0 ||
-        json_num(line, "overruns", overruns) < 0) {
+    if (strncmp(line, "ok {", 4) != 0 ||
+        wsg_json_num(line, "steps", steps) < 0 ||
+        wsg_json_num(line, "overruns", overruns) < 0) {
         msg("control: \"stats\" answered \"%.120s\" (want ok {...\"steps\":"
             "S,\"overruns\":O...})",
             line);
@@ -1373,7 +1360,7 @@ static int scale_up(struct link *ctl, char *prior, size_t cap, int *scaled)
 
     if (ctl_cmd(ctl, "stats", line, sizeof line) < 0)
         return -1;
-    if (strncmp(line, "ok {", 4) != 0 || json_num(line, "scale", &v) < 0) {
+    if (strncmp(line, "ok {", 4) != 0 || wsg_json_num(line, "scale", &v) < 0) {
         msg("control: \"stats\" answered \"%.120s\" (want ok {...\"scale\":"
             "X...})",
             line);

@@ -10,6 +10,7 @@
  */
 #define _GNU_SOURCE /* cfmakeraw, getaddrinfo, sigaction, clock_gettime */
 
+#include "ctljson.h"
 #include "wsg/device.h"
 #include "wsg/proto.h"
 
@@ -683,22 +684,6 @@ static int gripper_error(uint8_t id, unsigned status)
 
 /* ---- commands ---- */
 
-/* The number after "key": in the control channel's state JSON (its keys
- * are unique, the nested stats' too). */
-static int json_num(const char *json, const char *key, double *v)
-{
-    char pat[32];
-    const char *p;
-    char *end;
-
-    snprintf(pat, sizeof pat, "\"%s\":", key);
-    p = strstr(json, pat);
-    if (!p)
-        return -1;
-    *v = strtod(p + strlen(pat), &end);
-    return end == p + strlen(pat) ? -1 : 0;
-}
-
 /* A reading through the emulator's control channel ("state"), printed as
  * the gripper's answer would be. Nothing is sent to the gripper, so
  * nothing happens to it: no 07h at the close (which aborts a running
@@ -708,7 +693,7 @@ static int control_read(struct ctx *x, uint8_t id, const uint8_t *payload,
 {
     char line[2048];
     size_t n = 0;
-    double deadline = now_ms() + x->o.timeout_s * 1000.0, v[3];
+    double deadline = now_ms() + x->o.timeout_s * 1000.0, v[3] = {0, 0, 0};
     uint8_t p[8];
     size_t np = 4;
     int ok = 1;
@@ -748,34 +733,34 @@ static int control_read(struct ctx *x, uint8_t id, const uint8_t *payload,
     }
     switch (id) {
     case WSG_CMD_GET_SYSTEM_STATE:
-        ok = json_num(line, "flags", v) == 0;
+        ok = wsg_json_num(line, "flags", v) == 0;
         wsg_put_u32(p, (uint32_t)v[0]);
         break;
     case WSG_CMD_GET_GRASP_STATE:
-        ok = json_num(line, "grasp_state", v) == 0;
+        ok = wsg_json_num(line, "grasp_state", v) == 0;
         p[0] = (uint8_t)v[0];
         np = 1;
         break;
     case WSG_CMD_GET_WIDTH:
     case WSG_CMD_GET_SPEED:
     case WSG_CMD_GET_FORCE:
-        ok = json_num(line,
-                      id == WSG_CMD_GET_WIDTH   ? "width"
-                      : id == WSG_CMD_GET_SPEED ? "speed"
-                                                : "force",
-                      v) == 0;
+        ok = wsg_json_num(line,
+                          id == WSG_CMD_GET_WIDTH   ? "width"
+                          : id == WSG_CMD_GET_SPEED ? "speed"
+                                                    : "force",
+                          v) == 0;
         wsg_put_f32(p, (float)v[0]);
         break;
     case WSG_CMD_GET_TEMPERATURE:
-        ok = json_num(line, "temperature", v) == 0;
+        ok = wsg_json_num(line, "temperature", v) == 0;
         wsg_put_u16(
             p, (uint16_t)(int16_t)(v[0] * 10.0 + (v[0] < 0 ? -0.5 : 0.5)));
         np = 2;
         break;
     case WSG_CMD_GET_GRASP_STATS:
-        ok = json_num(line, "total", v) == 0 &&
-             json_num(line, "no_part", v + 1) == 0 &&
-             json_num(line, "lost_part", v + 2) == 0;
+        ok = wsg_json_num(line, "total", v) == 0 &&
+             wsg_json_num(line, "no_part", v + 1) == 0 &&
+             wsg_json_num(line, "lost_part", v + 2) == 0;
         wsg_put_u32(p, (uint32_t)v[0]);
         wsg_put_u16(p + 4, (uint16_t)v[1]);
         wsg_put_u16(p + 6, (uint16_t)v[2]);

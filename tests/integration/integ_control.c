@@ -449,6 +449,21 @@ static int next_of(struct emu_client *c, uint8_t id, double *v)
     return (int)f.status;
 }
 
+/* The answers to 40h, 41h and 44h sent after a command, at rest: the
+ * flags under mask as want, the grasping state gs, speed 0. */
+static void expect_at_rest(struct emu_client *c, uint32_t mask, uint32_t want,
+                           int gs)
+{
+    double fl = 0, g = -1, sp = -1;
+
+    CHECK_EQ(next_of(c, WSG_CMD_GET_SYSTEM_STATE, &fl), WSG_E_SUCCESS);
+    CHECK_EQ((uint32_t)fl & mask, want);
+    CHECK_EQ(next_of(c, WSG_CMD_GET_GRASP_STATE, &g), WSG_E_SUCCESS);
+    CHECK_EQ(g, gs);
+    CHECK_EQ(next_of(c, WSG_CMD_GET_SPEED, &sp), WSG_E_SUCCESS);
+    CHECK_NEAR(sp, 0.0, 1e-6);
+}
+
 /* Every answer reflects its command at once: with time paused (no step
  * at all), or in the same write, 40h/41h/44h read right after Stop, FAST
  * STOP, "ack", a motion command, a close without 07h or a control fault
@@ -489,13 +504,8 @@ static void test_at_once(struct emu *e, struct emu_client *c, struct ctl *k)
     send_batch(c, ids, pl, ln, 4);
     CHECK_EQ(next_of(c, WSG_CMD_STOP, NULL), WSG_E_SUCCESS);
     CHECK_EQ(next_of(c, WSG_CMD_PREPOSITION, NULL), WSG_E_CMD_ABORTED);
-    CHECK_EQ(next_of(c, q[0], &fl), WSG_E_SUCCESS);
-    CHECK(((uint32_t)fl & (WSG_SF_MOVING | WSG_SF_AXIS_STOPPED)) ==
-          WSG_SF_AXIS_STOPPED);
-    CHECK_EQ(next_of(c, q[1], &gs), WSG_E_SUCCESS);
-    CHECK_EQ(gs, WSG_GS_IDLE);
-    CHECK_EQ(next_of(c, q[2], &sp), WSG_E_SUCCESS);
-    CHECK_NEAR(sp, 0.0, 1e-6);
+    expect_at_rest(c, WSG_SF_MOVING | WSG_SF_AXIS_STOPPED, WSG_SF_AXIS_STOPPED,
+                   WSG_GS_IDLE);
 
     /* A motion, one step, then FAST STOP: error state at once. */
     ids[0] = WSG_CMD_PREPOSITION, pl[0] = mv, ln[0] = n;
@@ -506,13 +516,8 @@ static void test_at_once(struct emu *e, struct emu_client *c, struct ctl *k)
     send_batch(c, ids, pl, ln, 4);
     CHECK_EQ(next_of(c, WSG_CMD_FAST_STOP, NULL), WSG_E_SUCCESS);
     CHECK_EQ(next_of(c, WSG_CMD_PREPOSITION, NULL), WSG_E_CMD_ABORTED);
-    CHECK_EQ(next_of(c, q[0], &fl), WSG_E_SUCCESS);
-    CHECK(((uint32_t)fl & (WSG_SF_MOVING | WSG_SF_FAST_STOP)) ==
-          WSG_SF_FAST_STOP);
-    CHECK_EQ(next_of(c, q[1], &gs), WSG_E_SUCCESS);
-    CHECK_EQ(gs, WSG_GS_ERROR);
-    CHECK_EQ(next_of(c, q[2], &sp), WSG_E_SUCCESS);
-    CHECK_NEAR(sp, 0.0, 1e-6);
+    expect_at_rest(c, WSG_SF_MOVING | WSG_SF_FAST_STOP, WSG_SF_FAST_STOP,
+                   WSG_GS_ERROR);
 
     /* FAST STOP, "ack" and a motion in one write, no step: the motion is
      * accepted, and 40h shows it moving, out of FAST STOP. */
@@ -553,13 +558,8 @@ static void test_at_once(struct emu *e, struct emu_client *c, struct ctl *k)
     CHECK_EQ(next_of(c, WSG_CMD_PREPOSITION, NULL), WSG_E_CMD_ABORTED);
     send_batch(c, q, (const void *const[]){NULL, NULL, NULL},
                (const size_t[]){0, 0, 0}, 3);
-    CHECK_EQ(next_of(c, q[0], &fl), WSG_E_SUCCESS);
-    CHECK(((uint32_t)fl & (WSG_SF_POWER_FAULT | WSG_SF_FAST_STOP)) ==
-          (WSG_SF_POWER_FAULT | WSG_SF_FAST_STOP));
-    CHECK_EQ(next_of(c, q[1], &gs), WSG_E_SUCCESS);
-    CHECK_EQ(gs, WSG_GS_ERROR);
-    CHECK_EQ(next_of(c, q[2], &sp), WSG_E_SUCCESS);
-    CHECK_NEAR(sp, 0.0, 1e-6);
+    expect_at_rest(c, WSG_SF_MOVING | WSG_SF_POWER_FAULT | WSG_SF_FAST_STOP,
+                   WSG_SF_POWER_FAULT | WSG_SF_FAST_STOP, WSG_GS_ERROR);
     CMD_OK(k, "fault power off");
     CHECK_EQ(emu_request(c, WSG_CMD_ACK_FAST_STOP, ack, 3, NULL, EMU_REPLY_MS),
              WSG_E_SUCCESS);
