@@ -116,10 +116,10 @@ def test_part_taken_away_while_held_is_lost(wsgemu):
 def test_fast_stop_refuses_motion_until_acknowledged(wsgemu):
     g = _homed(wsgemu)
     c = wsgemu.control
-    # Paused, so the model step that applies each request is ours to run.
+    # Paused: no model step runs, and each answer shows its command's
+    # effect all the same.
     c.pause()
     g.fast_stop()
-    c.step(1)
     assert g.system_state() & SystemFlag.SF_FAST_STOP
     assert g.grasp_state() == GraspState.ERROR
     with pytest.raises(WsgError) as e:
@@ -129,11 +129,13 @@ def test_fast_stop_refuses_motion_until_acknowledged(wsgemu):
         g.home()
     assert e.value.status_name == "E_ACCESS_DENIED"
     g.ack()
-    c.step(1)
     assert not g.system_state() & SystemFlag.SF_FAST_STOP
     assert g.grasp_state() == GraspState.IDLE
+    # A motion right after "ack" is accepted, still without a step.
+    pending = g.move(50.0, 100.0, wait=False)
+    assert g.system_state() & SystemFlag.SF_MOVING
     c.resume()
-    g.move(50.0, 100.0)
+    pending.wait()
     assert g.width() == pytest.approx(50.0, abs=0.01)
 
 
@@ -204,7 +206,6 @@ def test_stop_aborts_a_running_motion(wsgemu):
     pending = g.move(10.0, 50.0, wait=False)
     c.step(100)
     g.stop()
-    c.step(1)
     with pytest.raises(WsgError) as e:
         pending.wait()
     assert e.value.status_name == "E_CMD_ABORTED"
