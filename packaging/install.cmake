@@ -14,33 +14,19 @@
 #                                   is kept, as it holds the admin's edits
 #   UNITDIR/wsgemu.service          with ExecStart naming this prefix's
 #                                   program and config file
-# SYSCONFDIR follows GNUInstallDirs' rule for a relative one: /etc for the
-# prefixes / and /usr, /etc/opt/X for /opt/X, else PREFIX/etc. DESTDIR
-# (CPack's staging directory) is applied by file(INSTALL) as usual, and is
-# not part of any path written into the unit.
+# Absolute paths come from GNUInstallDirs' own rule, applied to the prefix
+# of this install: /etc for the prefixes / and /usr, /etc/opt/X for /opt/X,
+# else PREFIX/etc; other directories below the prefix unless absolute.
+# DESTDIR (CPack's staging directory) is applied by file(INSTALL) as usual,
+# and is not part of any path written into the unit.
 
-# An absolute directory as it is, a relative one below the prefix.
-function(wsg_full_dir out dir)
-  if(IS_ABSOLUTE "${dir}")
-    set(${out} "${dir}" PARENT_SCOPE)
-  else()
-    set(${out} "${CMAKE_INSTALL_PREFIX}/${dir}" PARENT_SCOPE)
-  endif()
-endfunction()
-
-string(REGEX REPLACE "/+$" "" wsg_prefix "${CMAKE_INSTALL_PREFIX}")
-if(IS_ABSOLUTE "${WSG_SYSCONFDIR}")
-  set(wsg_etc "${WSG_SYSCONFDIR}")
-elseif(wsg_prefix STREQUAL "" OR wsg_prefix STREQUAL "/usr")
-  set(wsg_etc "/${WSG_SYSCONFDIR}")
-elseif(wsg_prefix MATCHES "^/opt/(.+)$")
-  set(wsg_etc "/${WSG_SYSCONFDIR}/opt/${CMAKE_MATCH_1}")
-else()
-  set(wsg_etc "${wsg_prefix}/${WSG_SYSCONFDIR}")
-endif()
+# Set only so that GNUInstallDirs, outside a project, need not guess it.
+set(CMAKE_INSTALL_LIBDIR lib)
+include(GNUInstallDirs)
+GNUInstallDirs_get_absolute_install_dir(wsg_etc WSG_SYSCONFDIR SYSCONFDIR)
+GNUInstallDirs_get_absolute_install_dir(wsg_bindir WSG_BINDIR BINDIR)
+GNUInstallDirs_get_absolute_install_dir(wsg_unitdir WSG_UNITDIR UNITDIR)
 set(wsg_confdir "${wsg_etc}/wsgemu")
-wsg_full_dir(wsg_bindir "${WSG_BINDIR}")
-wsg_full_dir(wsg_unitdir "${WSG_UNITDIR}")
 
 # The config file: never overwrite one that is there (the Debian package
 # marks it a conffile, so dpkg asks instead).

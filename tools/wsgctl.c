@@ -1275,14 +1275,20 @@ static long read_hex(FILE *in, uint8_t *buf, size_t cap)
     return (long)n;
 }
 
+/* The payload leads with a status the manual names. */
+static int leads_with_status(const uint8_t *payload, size_t size)
+{
+    return size >= 2 &&
+           strcmp(wsg_status_name(wsg_get_u16(payload)), "E_UNKNOWN") != 0;
+}
+
 /* Could this payload be a reply to ID? A status the manual names first;
  * with E_SUCCESS, the parameters that ID returns. */
 static int reply_fits(uint8_t id, const uint8_t *payload, size_t size)
 {
     size_t n = size - 2;
 
-    if (size < 2 ||
-        !strcmp(wsg_status_name(wsg_get_u16(payload)), "E_UNKNOWN"))
+    if (!leads_with_status(payload, size))
         return 0;
     if (wsg_get_u16(payload) != WSG_E_SUCCESS)
         return n == 0;
@@ -1329,8 +1335,7 @@ static const char *direction(uint8_t id, const uint8_t *payload, size_t size)
         return "request";
     /* Neither: a request the gripper refuses by its length (or an ID it
      * does not know), unless it leads with a status. */
-    return size >= 2 &&
-                   strcmp(wsg_status_name(wsg_get_u16(payload)), "E_UNKNOWN")
+    return leads_with_status(payload, size)
                ? "reply (unexpected length)"
                : "request (refused by its length or ID)";
 }
@@ -1395,8 +1400,7 @@ static int c_decode(struct ctx *x, int argc, char **argv)
         int is_reply = strncmp(dir, "reply", 5) == 0;
         packets++;
         printf("%s %02Xh %s SIZE %u", dir, id, cmd_name(id), size);
-        if (strcmp(dir, "request") != 0 && size >= 2 &&
-            strcmp(wsg_status_name(wsg_get_u16(payload)), "E_UNKNOWN"))
+        if (strcmp(dir, "request") != 0 && leads_with_status(payload, size))
             printf(" status %s", wsg_status_name(wsg_get_u16(payload)));
         printf(" payload%s", size ? " " : "");
         print_hex(payload, size);

@@ -116,10 +116,6 @@ void wsg_device_dispatch(struct wsg_device *d, struct wsg_session *s,
 
 /* One model step; final results leave through lookup/send. */
 void wsg_device_step(struct wsg_device *d);
-/* Apply what was requested outside a command (a fault injected, a
- * connection closed) now, without a step; wsg_device_dispatch does this
- * itself around every command. */
-void wsg_device_settle(struct wsg_device *d);
 /* Send the stream packets of s that are due at the device's time. */
 void wsg_device_poll_streams(struct wsg_device *d, struct wsg_session *s);
 /* The same for every streaming session. */

@@ -676,9 +676,9 @@ uint32_t wsg_axis_flags(const struct wsg_axis *ax)
     if (ax->cfg.force_sensor && (ax->grasp_state == WSG_GS_GRASPING ||
                                  ax->grasp_state == WSG_GS_HOLDING))
         f |= WSG_SF_FORCECNTL_MODE;
-    /* As the commands see it: an acknowledge or a FAST STOP answered but
-     * not yet stepped already counts, so a 40h right after "ack" agrees
-     * with the E_SUCCESS that "ack" got. */
+    /* As the commands see it: an acknowledge or a FAST STOP recorded but
+     * not yet settled already counts (the dispatcher settles after every
+     * command; a caller driving the model directly may not). */
     if (wsg_axis_fast_stopped(ax))
         f |= WSG_SF_FAST_STOP;
     return f;

@@ -243,11 +243,6 @@ void wsg_device_step(struct wsg_device *d)
     wsg_axis_step(&d->axis);
 }
 
-void wsg_device_settle(struct wsg_device *d)
-{
-    wsg_axis_settle(&d->axis);
-}
-
 int wsg_device_idle(const struct wsg_device *d)
 {
     return wsg_axis_idle(&d->axis);

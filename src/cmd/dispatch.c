@@ -58,16 +58,16 @@ void wsg_device_dispatch(struct wsg_device *d, struct wsg_session *s,
     uint16_t st;
 
     r.len = 0;
-    /* What a closed connection or a fault left pending counts before this
-     * command is judged; what this command asked for is applied once it is
-     * answered, so its reply goes out before any final result it causes
-     * (22h E_SUCCESS, then the stopped motion's E_CMD_ABORTED) and the next
-     * command, even in the same read, sees the new state. */
-    wsg_axis_settle(&d->axis);
     st = wsg_cmd_check(d, s, c, f);
     if (st == WSG_E_SUCCESS)
         st = c->handler(d, s, f, &r);
     wsg_device_reply(d, s, f->id, st, r.params,
                      st == WSG_E_SUCCESS ? r.len : 0);
+    /* What the command asked for is applied once it is answered, so its
+     * reply goes out before any final result it causes (22h E_SUCCESS,
+     * then the stopped motion's E_CMD_ABORTED) and the next command, even
+     * in the same read, sees the new state. Nothing else leaves requests
+     * pending between commands: a close settles itself, and so does the
+     * control channel. */
     wsg_axis_settle(&d->axis);
 }

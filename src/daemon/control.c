@@ -496,14 +496,12 @@ static void run_line(struct wsg_ctl_client *c, char *line)
     }
     /* The selected gripper's time is brought up to the grid before the
      * command reads or changes it; afterwards it is stepped if it now has
-     * work. Settled on both sides like a gripper command: what a close
-     * left pending shows in "state", and a fault's or a drop's
-     * consequences (FAST STOP, a motion aborted) are there when "ok" is. */
+     * work. Settled like a gripper command: a fault's consequences (FAST
+     * STOP, a motion aborted) are there when "ok" is. */
     c->ctl->cur = &c->ctl->loop->grippers[c->gripper];
     wsg_loop_touch(c->ctl->loop, c->ctl->cur);
-    wsg_device_settle(&c->ctl->cur->dev);
     run_command(c, argc, argv);
-    wsg_device_settle(&c->ctl->cur->dev);
+    wsg_axis_settle(&c->ctl->cur->dev.axis);
     wsg_loop_check(c->ctl->loop, c->ctl->cur);
 }
 

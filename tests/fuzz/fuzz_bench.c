@@ -369,7 +369,7 @@ static void fuzz_world(unsigned ev, const uint8_t *data, size_t len)
     default:
         return;
     }
-    wsg_device_settle(&B.dev);
+    wsg_axis_settle(&B.dev.axis);
 }
 
 void fuzz_bench_chunk(uint8_t ctl, const uint8_t *data, size_t len)
