@@ -557,6 +557,186 @@ static void test_part_wider_than_opening(void)
     }
 }
 
+/* Overdrive off while holding with more than the nominal force: the force
+ * on the part drops to nominal at once (3.3.8, D8), the part springs back
+ * to where that force holds it, and the drive stops heating. */
+static void test_overdrive_off_while_holding(void)
+{
+    struct tdev t;
+    uint8_t on = 1, off = 0;
+
+    tdev_init(&t);
+    CHECK_EQ(tdev_home(&t, 0), WSG_E_SUCCESS);
+    CHECK_EQ(tdev_cmd(&t, WSG_CMD_OVERDRIVE, &on, 1), WSG_E_SUCCESS);
+    CHECK_EQ(tdev_cmd1f(&t, WSG_CMD_SET_FORCE_LIMIT, 110.0f), WSG_E_SUCCESS);
+    wsg_axis_set_part(&t.dev.axis, 60.0, 0); /* 50 N/mm */
+    CHECK_EQ(tdev_cmd2f(&t, WSG_CMD_GRASP, 60.0f, 100.0f), WSG_E_CMD_PENDING);
+    CHECK_EQ(tdev_final(&t, WSG_CMD_GRASP, 4000), WSG_E_SUCCESS);
+    CHECK_NEAR(tdev_getf(&t, WSG_CMD_GET_FORCE), 110.0, 1e-3);
+    CHECK_NEAR(tdev_getf(&t, WSG_CMD_GET_WIDTH), 60.0 - 110.0 / 50.0, 1e-3);
+    tdev_steps(&t, 1000); /* warming up */
+    CHECK(t.dev.axis.temperature > t.dev.axis.cfg.ambient + 0.5);
+
+    /* no step in between: every reading shows it at once */
+    CHECK_EQ(tdev_cmd(&t, WSG_CMD_OVERDRIVE, &off, 1), WSG_E_SUCCESS);
+    CHECK_NEAR(tdev_getf(&t, WSG_CMD_GET_FORCE_LIMIT), 80.0, 1e-3);
+    CHECK_NEAR(tdev_getf(&t, WSG_CMD_GET_FORCE), 80.0, 1e-3);
+    CHECK_NEAR(tdev_getf(&t, WSG_CMD_GET_WIDTH), 60.0 - 80.0 / 50.0, 1e-3);
+    CHECK_EQ(tdev_grasp_state(&t), WSG_GS_HOLDING);
+    CHECK_EQ(tdev_flags(&t), WSG_SF_REFERENCED | WSG_SF_BLOCKED_MINUS |
+                                 WSG_SF_TARGET_POS_REACHED);
+    /* still held at nominal force; holding at nominal heats nothing, so
+     * the drive cools down instead of warming further */
+    {
+        double before = t.dev.axis.temperature;
+        tdev_steps(&t, 5000);
+        CHECK(t.dev.axis.temperature < before);
+        CHECK_NEAR(tdev_getf(&t, WSG_CMD_GET_FORCE), 80.0, 1e-3);
+        CHECK_EQ(tdev_grasp_state(&t), WSG_GS_HOLDING);
+    }
+    /* a clamp at or below nominal is not touched by leaving overdrive */
+    CHECK_EQ(tdev_cmd(&t, WSG_CMD_OVERDRIVE, &on, 1), WSG_E_SUCCESS);
+    CHECK_EQ(tdev_cmd(&t, WSG_CMD_OVERDRIVE, &off, 1), WSG_E_SUCCESS);
+    CHECK_NEAR(tdev_getf(&t, WSG_CMD_GET_FORCE), 80.0, 1e-3);
+}
+
+/* Soft limits set while the fingers are beyond them and moving deeper:
+ * stopped at once, as at a limit crossed (3.3.5, 3.2.2's E_RANGE_ERROR,
+ * D4/D5); moving out stays allowed. */
+static void test_soft_limits_inside(void)
+{
+    struct tdev t;
+    double w;
+
+    tdev_init(&t);
+    CHECK_EQ(tdev_home(&t, 0), WSG_E_SUCCESS);
+    /* closing from 110 towards 20 at 50 mm/s, now around 80 */
+    CHECK_EQ(tdev_move(&t, 0, 20.0f, 50.0f), WSG_E_CMD_PENDING);
+    tdev_steps(&t, 800);
+    w = t.dev.axis.width;
+    REQUIRE(w > 70.0 && w < 95.0);
+    tdev_clear(&t);
+    CHECK_EQ(tdev_cmd2f(&t, WSG_CMD_SET_SOFT_LIMITS, 100.0f, 110.0f),
+             WSG_E_SUCCESS);
+    /* at once, no step: the move ended with a range error, FAST STOP */
+    CHECK_EQ(t.sess[0].n, 2);
+    CHECK_EQ(t.sess[0].pkts[1].id, WSG_CMD_PREPOSITION);
+    CHECK_EQ(t.sess[0].pkts[1].status, WSG_E_RANGE_ERROR);
+    CHECK_EQ(tdev_flags(&t) & ~WSG_SF_CMD_FAILURE,
+             WSG_SF_REFERENCED | WSG_SF_SOFT_LIMIT_MINUS | WSG_SF_FAST_STOP);
+    CHECK_EQ(tdev_grasp_state(&t), WSG_GS_ERROR);
+    CHECK_NEAR(t.dev.axis.width, w, 1e-9); /* where it was */
+    tdev_clear(&t);
+    tdev_steps(&t, 100);
+    CHECK_NEAR(t.dev.axis.width, w, 1e-9);
+    /* out of the restricted area: allowed after the acknowledge */
+    CHECK_EQ(tdev_cmd(&t, WSG_CMD_ACK_FAST_STOP, "ack", 3), WSG_E_SUCCESS);
+    CHECK_EQ(tdev_move(&t, 0, 105.0f, 50.0f), WSG_E_CMD_PENDING);
+    CHECK_EQ(tdev_final(&t, WSG_CMD_PREPOSITION, 4000), WSG_E_SUCCESS);
+    CHECK_NEAR(t.dev.axis.width, 105.0, 1e-9);
+
+    /* the same on the plus side, with a clamp that snaps on deeper: a
+     * clamp on an obstacle at 60, target 90, limits set to 20..50, the
+     * obstacle goes */
+    CHECK_EQ(tdev_cmd(&t, WSG_CMD_CLEAR_SOFT_LIMITS, NULL, 0), WSG_E_SUCCESS);
+    CHECK_EQ(tdev_move(&t, 0, 40.0f, 100.0f), WSG_E_CMD_PENDING);
+    CHECK_EQ(tdev_final(&t, WSG_CMD_PREPOSITION, 4000), WSG_E_SUCCESS);
+    wsg_axis_set_obstacle(&t.dev.axis, 60.0);
+    CHECK_EQ(tdev_move(&t, 0, 90.0f, 100.0f), WSG_E_CMD_PENDING);
+    CHECK_EQ(tdev_final(&t, WSG_CMD_PREPOSITION, 4000), WSG_E_AXIS_BLOCKED);
+    CHECK_NEAR(t.dev.axis.width, 60.0, 1e-9);
+    CHECK_EQ(tdev_cmd2f(&t, WSG_CMD_SET_SOFT_LIMITS, 20.0f, 50.0f),
+             WSG_E_SUCCESS);
+    CHECK(tdev_flags(&t) & WSG_SF_SOFT_LIMIT_PLUS);
+    wsg_axis_set_obstacle(&t.dev.axis, -1.0);
+    tdev_steps(&t, 1000);
+    CHECK_NEAR(t.dev.axis.width, 60.0, 1e-9);
+    CHECK(tdev_flags(&t) & WSG_SF_FAST_STOP);
+    CHECK(!(tdev_flags(&t) & WSG_SF_MOVING));
+}
+
+/* A grasp with nothing between the fingers whose clamping travel reaches
+ * past an end stop: the fingers meet (or reach the stroke's end) inside
+ * the grasping window, so the gripper holds, "gripping itself". */
+static void test_grasp_end_stop(void)
+{
+    struct tdev t;
+
+    tdev_init(&t);
+    CHECK_EQ(tdev_home(&t, 0), WSG_E_SUCCESS);
+    CHECK_EQ(tdev_cmd2f(&t, WSG_CMD_GRASP, 0.0f, 100.0f), WSG_E_CMD_PENDING);
+    CHECK_EQ(tdev_final(&t, WSG_CMD_GRASP, 4000), WSG_E_SUCCESS);
+    CHECK_EQ(tdev_grasp_state(&t), WSG_GS_HOLDING);
+    CHECK_NEAR(t.dev.axis.width, 0.0, 1e-9);
+    CHECK_NEAR(tdev_getf(&t, WSG_CMD_GET_FORCE), 40.0, 1e-3);
+    CHECK_EQ(tdev_flags(&t), WSG_SF_REFERENCED | WSG_SF_BLOCKED_MINUS |
+                                 WSG_SF_TARGET_POS_REACHED);
+    CHECK(wsg_device_idle(&t.dev));
+    tdev_steps(&t, 100);
+    CHECK_EQ(tdev_grasp_state(&t), WSG_GS_HOLDING);
+    /* again from where the fingers already meet */
+    CHECK_EQ(tdev_cmd(&t, WSG_CMD_STOP, NULL, 0), WSG_E_SUCCESS);
+    CHECK_EQ(tdev_cmd2f(&t, WSG_CMD_GRASP, 0.0f, 100.0f), WSG_E_CMD_PENDING);
+    CHECK_EQ(tdev_final(&t, WSG_CMD_GRASP, 4000), WSG_E_SUCCESS);
+    CHECK_EQ(tdev_grasp_state(&t), WSG_GS_HOLDING);
+    CHECK_EQ(tdev_cmd(&t, WSG_CMD_GET_GRASP_STATS, NULL, 0), WSG_E_SUCCESS);
+    CHECK_EQ(wsg_get_u32(tdev_last(&t)->params), 2);
+    CHECK_EQ(wsg_get_u16(tdev_last(&t)->params + 4), 0);
+
+    /* a clamping travel that ends short of the end stop: no part */
+    CHECK_EQ(tdev_cmd2f(&t, WSG_CMD_RELEASE, 50.0f, 400.0f),
+             WSG_E_CMD_PENDING);
+    CHECK_EQ(tdev_final(&t, WSG_CMD_RELEASE, 4000), WSG_E_SUCCESS);
+    CHECK_EQ(tdev_cmd2f(&t, WSG_CMD_GRASP, 12.0f, 100.0f), WSG_E_CMD_PENDING);
+    CHECK_EQ(tdev_final(&t, WSG_CMD_GRASP, 4000), WSG_E_CMD_FAILED);
+    CHECK_NEAR(t.dev.axis.width, 2.0, 1e-9);
+
+    /* outside grasps at the open end stop: the same rule */
+    CHECK_EQ(tdev_cmd2f(&t, WSG_CMD_GRASP, 105.0f, 100.0f), WSG_E_CMD_PENDING);
+    CHECK_EQ(tdev_final(&t, WSG_CMD_GRASP, 4000), WSG_E_SUCCESS);
+    CHECK_EQ(tdev_grasp_state(&t), WSG_GS_HOLDING);
+    CHECK_NEAR(t.dev.axis.width, 110.0, 1e-9);
+    CHECK(tdev_flags(&t) & WSG_SF_BLOCKED_PLUS);
+    CHECK_EQ(tdev_cmd2f(&t, WSG_CMD_RELEASE, 50.0f, 400.0f),
+             WSG_E_CMD_PENDING);
+    CHECK_EQ(tdev_final(&t, WSG_CMD_RELEASE, 4000), WSG_E_SUCCESS);
+    CHECK_EQ(tdev_cmd2f(&t, WSG_CMD_GRASP, 95.0f, 100.0f), WSG_E_CMD_PENDING);
+    CHECK_EQ(tdev_final(&t, WSG_CMD_GRASP, 4000), WSG_E_CMD_FAILED);
+    CHECK_NEAR(t.dev.axis.width, 105.0, 1e-9);
+}
+
+/* The world changed under a clamp (the control channel does it between
+ * steps): a settle, as after every command, shows it at once. */
+static void test_world_at_once(void)
+{
+    struct tdev t;
+
+    tdev_init(&t);
+    CHECK_EQ(tdev_home(&t, 0), WSG_E_SUCCESS);
+    wsg_axis_set_part(&t.dev.axis, 40.0, 0);
+    CHECK_EQ(tdev_cmd2f(&t, WSG_CMD_GRASP, 40.0f, 100.0f), WSG_E_CMD_PENDING);
+    CHECK_EQ(tdev_final(&t, WSG_CMD_GRASP, 4000), WSG_E_SUCCESS);
+    wsg_axis_set_part(&t.dev.axis, -1.0, 0);
+    wsg_axis_settle(&t.dev.axis);
+    CHECK_EQ(tdev_grasp_state(&t), WSG_GS_PART_LOST);
+    CHECK(tdev_flags(&t) & WSG_SF_MOVING);
+    CHECK_EQ(t.dev.axis.force, 0.0);
+
+    /* a part that grows while held holds the fingers where they are */
+    tdev_steps(&t, 2000);
+    CHECK_EQ(tdev_cmd2f(&t, WSG_CMD_RELEASE, 60.0f, 400.0f),
+             WSG_E_CMD_PENDING);
+    CHECK_EQ(tdev_final(&t, WSG_CMD_RELEASE, 4000), WSG_E_SUCCESS);
+    wsg_axis_set_part(&t.dev.axis, 40.0, 0);
+    CHECK_EQ(tdev_cmd2f(&t, WSG_CMD_GRASP, 40.0f, 100.0f), WSG_E_CMD_PENDING);
+    CHECK_EQ(tdev_final(&t, WSG_CMD_GRASP, 4000), WSG_E_SUCCESS);
+    wsg_axis_set_part(&t.dev.axis, 45.0, 0);
+    wsg_axis_settle(&t.dev.axis);
+    tdev_steps(&t, 10);
+    CHECK_EQ(tdev_grasp_state(&t), WSG_GS_HOLDING);
+    CHECK_NEAR(t.dev.axis.width, 40.0 - 40.0 / 50.0, 1e-9);
+}
+
 int main(void)
 {
     test_durations();
@@ -574,5 +754,9 @@ int main(void)
     test_overheating();
     test_reset();
     test_part_wider_than_opening();
+    test_overdrive_off_while_holding();
+    test_soft_limits_inside();
+    test_grasp_end_stop();
+    test_world_at_once();
     TEST_EXIT();
 }

@@ -418,10 +418,22 @@ static void test_tare(void)
     CHECK_EQ(tdev_home(&t, 0), WSG_E_SUCCESS);
     wsg_axis_set_part(&t.dev.axis, 50.0, 0);
     CHECK_EQ(tdev_cmd2f(&t, WSG_CMD_GRASP, 50.0f, 100.0f), WSG_E_CMD_PENDING);
+    /* grasping is force control mode too: D9 shows it, and tare is
+     * refused whenever D9 is set (3.3.9) */
+    tdev_steps(&t, 10);
+    CHECK_EQ(tdev_grasp_state(&t), WSG_GS_GRASPING);
+    CHECK(tdev_flags(&t) & WSG_SF_FORCECNTL_MODE);
+    CHECK_EQ(tdev_cmd(&t, WSG_CMD_TARE, NULL, 0), WSG_E_ACCESS_DENIED);
     CHECK_EQ(tdev_final(&t, WSG_CMD_GRASP, 4000), WSG_E_SUCCESS);
     /* force control mode while holding: tare refused */
     CHECK(tdev_flags(&t) & WSG_SF_FORCECNTL_MODE);
     CHECK_EQ(tdev_cmd(&t, WSG_CMD_TARE, NULL, 0), WSG_E_ACCESS_DENIED);
+    /* released: out of force control mode, tare allowed again */
+    CHECK_EQ(tdev_cmd2f(&t, WSG_CMD_RELEASE, 70.0f, 100.0f),
+             WSG_E_CMD_PENDING);
+    CHECK_EQ(tdev_final(&t, WSG_CMD_RELEASE, 4000), WSG_E_SUCCESS);
+    CHECK(!(tdev_flags(&t) & WSG_SF_FORCECNTL_MODE));
+    CHECK_EQ(tdev_cmd(&t, WSG_CMD_TARE, NULL, 0), WSG_E_SUCCESS);
 }
 
 static void test_state_queries(void)

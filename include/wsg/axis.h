@@ -194,9 +194,11 @@ void wsg_axis_reset(struct wsg_axis *ax);
 /* Advance simulated time by one step (cfg.step_us): settle, then move. */
 void wsg_axis_step(struct wsg_axis *ax);
 /* A step of zero length: apply the recorded requests (FAST STOP,
- * acknowledge, stop, a new motion) and the consequences of faults now,
- * advancing neither time nor the fingers, so that the next answer shows
- * them (a 40h right after "ack" sees FAST STOP cleared). */
+ * acknowledge, stop, a new motion), the consequences of faults, of leaving
+ * overdrive and of soft limits, and changes of the world under a clamp (a
+ * part lost) now, advancing neither time nor the fingers' motion, so that
+ * the next answer shows them (a 40h right after "ack" sees FAST STOP
+ * cleared). */
 void wsg_axis_settle(struct wsg_axis *ax);
 /* Nothing moving, pending or changing: steps would not change the state, so
  * a caller may skip them (only time_us would advance). */
@@ -236,7 +238,8 @@ void wsg_axis_set_part(struct wsg_axis *ax, double width, double stiffness);
  * width < 0 removes it. */
 void wsg_axis_set_obstacle(struct wsg_axis *ax, double width);
 /* Inject or clear faults (WSG_FAULTS bits). A temperature, power or
- * current fault stops a running motion (E_CMD_ABORTED) at the next step. */
+ * current fault stops a running motion (E_CMD_ABORTED) at the next settle
+ * or step. */
 void wsg_axis_set_fault(struct wsg_axis *ax, uint32_t fault, int on);
 
 #endif

@@ -268,8 +268,9 @@ static int wsg_axis_block_at(const struct wsg_axis *ax, double dir, double f,
          * the fingers close only as far as the end stop. */
         if (p < wsg_axis_end_stop(ax, -1.0))
             p = wsg_axis_end_stop(ax, -1.0);
-        if (ax->width >= p - WSG_AXIS_EPS)
-            c[n++] = p;
+        /* Squeezed harder than f (a part that grew while held): it holds
+         * the fingers where they are, as wsg_axis_next_block says. */
+        c[n++] = p > ax->width ? ax->width : p;
     }
     if (ax->obstacle &&
         fabs(ax->width - wsg_axis_rep(ax, ax->obstacle_width)) <= WSG_AXIS_EPS)
@@ -304,6 +305,11 @@ static void wsg_axis_start(struct wsg_axis *ax, const struct wsg_motion *m)
     ax->motion = *m;
     wsg_profile_init(&ax->motion.prof, ax->width, m->target, m->speed, ax->acc,
                      decel);
+    /* A grasp that starts where its target is (at an end stop) still has a
+     * side: it pushes towards its nominal width, closing if that is not
+     * wider than the fingers (as wsg_axis_request_grasp chose). */
+    if (m->kind == WSG_MOTION_GRASP && ax->motion.prof.dist < WSG_AXIS_EPS)
+        ax->motion.prof.dir = m->nominal <= ax->width ? -1.0 : 1.0;
     ax->clamping = 0;
     ax->force = 0.0;
     if (m->kind == WSG_MOTION_SNAP)
@@ -487,6 +493,15 @@ static void wsg_axis_apply_requests(struct wsg_axis *ax)
     }
 }
 
+/* A soft limit stops the motion the fastest way: FAST STOP, and the
+ * motion ends E_RANGE_ERROR (3.2.2). */
+static void wsg_axis_soft_limit_stop(struct wsg_axis *ax)
+{
+    ax->fast_stop = 1;
+    ax->grasp_state = WSG_GS_ERROR;
+    wsg_axis_abort(ax, WSG_E_RANGE_ERROR);
+}
+
 /* Entering the area beyond a soft limit: FAST STOP at the limit (3.3.5). */
 static int wsg_axis_soft_limit_hit(struct wsg_axis *ax, double x, double v)
 {
@@ -494,19 +509,34 @@ static int wsg_axis_soft_limit_hit(struct wsg_axis *ax, double x, double v)
 
     if (!ax->soft_limits || ax->motion.kind == WSG_MOTION_HOMING)
         return 0;
-    if (v < 0 && x < ax->soft_minus - WSG_AXIS_EPS &&
-        ax->width >= ax->soft_minus - WSG_AXIS_EPS)
-        limit = ax->soft_minus;
-    else if (v > 0 && x > ax->soft_plus + WSG_AXIS_EPS &&
-             ax->width <= ax->soft_plus + WSG_AXIS_EPS)
-        limit = ax->soft_plus;
+    /* Fingers already beyond a limit (set while they were there) stop
+     * where they are: they may only move out of the restricted area. */
+    if (v < 0 && x < ax->soft_minus - WSG_AXIS_EPS)
+        limit = ax->width < ax->soft_minus ? ax->width : ax->soft_minus;
+    else if (v > 0 && x > ax->soft_plus + WSG_AXIS_EPS)
+        limit = ax->width > ax->soft_plus ? ax->width : ax->soft_plus;
     else
         return 0;
     ax->width = limit;
-    ax->fast_stop = 1;
-    ax->grasp_state = WSG_GS_ERROR;
-    wsg_axis_abort(ax, WSG_E_RANGE_ERROR);
+    wsg_axis_soft_limit_stop(ax);
     return 1;
+}
+
+/* A motion heading deeper into the area beyond a soft limit the fingers
+ * are already in (limits set while they were there, or a clamp that snaps
+ * on): stopped at once, as at the limit (3.3.5, D4/D5). */
+static void wsg_axis_soft_limit_check(struct wsg_axis *ax)
+{
+    double dir = ax->motion.prof.dir;
+
+    if (!ax->soft_limits || ax->motion.kind == WSG_MOTION_NONE ||
+        ax->motion.kind == WSG_MOTION_HOMING)
+        return;
+    if ((dir < 0 && ax->width < ax->soft_minus - WSG_AXIS_EPS &&
+         ax->motion.target < ax->width - WSG_AXIS_EPS) ||
+        (dir > 0 && ax->width > ax->soft_plus + WSG_AXIS_EPS &&
+         ax->motion.target > ax->width + WSG_AXIS_EPS))
+        wsg_axis_soft_limit_stop(ax);
 }
 
 static void wsg_axis_advance(struct wsg_axis *ax, double dt)
@@ -536,7 +566,12 @@ static void wsg_axis_advance(struct wsg_axis *ax, double dt)
     /* The mechanical end stop: homing's goal; any other motion only meets
      * it when a wrong reference put its target beyond it. */
     end = wsg_axis_end_stop(ax, dir);
-    if ((m->kind == WSG_MOTION_HOMING && over) ||
+    /* A grasp whose clamping travel reaches past the end stop finds the
+     * fingers meeting it (or the stroke's end): a block like any other,
+     * which the grasping window judges. */
+    if ((over &&
+         (m->kind == WSG_MOTION_HOMING ||
+          (m->kind == WSG_MOTION_GRASP && fabs(x - end) <= WSG_AXIS_EPS))) ||
         (dir < 0 ? x < end - WSG_AXIS_EPS : x > end + WSG_AXIS_EPS)) {
         ax->width = end;
         ax->force = m->kind == WSG_MOTION_HOMING ? 0.0 : f;
@@ -621,10 +656,32 @@ static void wsg_axis_thermal(struct wsg_axis *ax, double dt)
     ax->thermal_faults = f;
 }
 
+/* Out of overdrive, the drive cannot push harder than the nominal force
+ * (3.3.8, D8): a clamp that holds with more drops to it at once, and a
+ * part squeezed by it springs back to where the nominal force holds it. */
+static void wsg_axis_limit_clamp(struct wsg_axis *ax)
+{
+    double old = ax->clamp_force, f = ax->cfg.nom_force;
+
+    if (!ax->clamping || ax->overdrive || old <= f)
+        return;
+    if (ax->clamp_dir < 0 && ax->part &&
+        fabs(ax->width - wsg_axis_squeezed(ax, old)) <= WSG_AXIS_EPS)
+        ax->width = wsg_axis_squeezed(ax, f);
+    ax->clamp_force = f;
+    ax->force = f;
+}
+
 void wsg_axis_settle(struct wsg_axis *ax)
 {
     wsg_axis_apply_requests(ax);
     wsg_axis_apply_faults(ax);
+    wsg_axis_limit_clamp(ax);
+    /* The world may have changed under a clamp (a part taken away, an
+     * obstacle removed): lost, or snapping on, from now. */
+    if (ax->motion.kind == WSG_MOTION_NONE && ax->clamping)
+        wsg_axis_hold(ax);
+    wsg_axis_soft_limit_check(ax);
 }
 
 void wsg_axis_step(struct wsg_axis *ax)
@@ -635,8 +692,6 @@ void wsg_axis_step(struct wsg_axis *ax)
     wsg_axis_settle(ax);
     if (ax->motion.kind != WSG_MOTION_NONE)
         wsg_axis_advance(ax, dt);
-    else if (ax->clamping)
-        wsg_axis_hold(ax);
     wsg_axis_thermal(ax, dt);
 }
 

@@ -219,8 +219,10 @@ static uint16_t wsg_cmd_tare(struct wsg_device *d, struct wsg_session *s,
     (void)r;
     if (!d->axis.cfg.force_sensor)
         return WSG_E_NOT_AVAILABLE;
-    if (d->axis.grasp_state == WSG_GS_HOLDING)
-        return WSG_E_ACCESS_DENIED; /* in force control mode */
+    /* Only out of force control mode (3.3.9), which is what D9 shows:
+     * the flag and the rule are one. */
+    if (wsg_axis_flags(&d->axis) & WSG_SF_FORCECNTL_MODE)
+        return WSG_E_ACCESS_DENIED;
     return WSG_E_SUCCESS;
 }
 

@@ -5,9 +5,10 @@
  * dropped instead of blocking the loop).
  *
  * Commands act at once, between the loop's model steps: the world setters
- * only record what the model's next step will see (a removed part is lost
- * by the step, with the statistics the manual gives), and the time commands
- * go to the loop, which alone deals with time. "time step" runs its steps
+ * change what the model sees and the model is settled before the answer
+ * goes out (a removed part is lost then, with the statistics the manual
+ * gives), and the time commands go to the loop, which alone deals with
+ * time. "time step" runs its steps
  * synchronously before answering, so a test in lockstep knows that every
  * packet the steps caused was sent before the "ok".
  *

@@ -65,6 +65,9 @@ struct wsg_tcp_conn {
     int dead;
     /* Dropped for not reading: closed with a reset (see conn_free). */
     int reset;
+    /* The device already knows it is gone (the control channel's drop
+     * tells it at once, before the close that follows the batch). */
+    int reported;
     uint32_t events; /* as registered with epoll */
     char peer[WSG_ADDR_LEN];
     struct wsg_parser parser;
@@ -221,7 +224,8 @@ static void conn_close(struct wsg_tcp *tcp, struct wsg_tcp_conn *c)
         c->dead = 1;
         tcp->ndead++;
     }
-    wsg_device_session_closed(tcp->dev, &c->session);
+    if (!c->reported)
+        wsg_device_session_closed(tcp->dev, &c->session);
     conn_free(tcp, c);
 }
 
@@ -402,6 +406,11 @@ static unsigned tcp_drop_all(struct wsg_transport *t)
 
         if (c && !c->dead) {
             conn_kill(c, "dropped by the control channel");
+            /* Its consequences (FAST STOP unless it announced the close)
+             * are there when the control channel answers, not only after
+             * the batch, when the socket is closed. */
+            wsg_device_session_closed(tcp->dev, &c->session);
+            c->reported = 1;
             n++;
         }
     }

@@ -577,6 +577,98 @@ static void test_at_once(struct emu *e, struct emu_client *c, struct ctl *k)
     emu_drop_kept(c);
 }
 
+/* A motion with time paused: its E_CMD_PENDING, then time stepped far
+ * enough for any motion here, then its final result. */
+static int motion_paused(struct emu_client *c, struct ctl *k, uint8_t id,
+                         const uint8_t *p, size_t n)
+{
+    CHECK_EQ(emu_request(c, id, p, n, NULL, EMU_REPLY_MS), WSG_E_CMD_PENDING);
+    CMD_OK(k, "time step 3000");
+    return next_of(c, id, NULL);
+}
+
+/* The answers to 40h, 41h and 45h read right after a control command:
+ * flags under mask as want, the grasping state gs, the force f. */
+static void expect_now(struct emu_client *c, uint32_t mask, uint32_t want,
+                       int gs, double f)
+{
+    const uint8_t q[3] = {WSG_CMD_GET_SYSTEM_STATE, WSG_CMD_GET_GRASP_STATE,
+                          WSG_CMD_GET_FORCE};
+    double fl = 0, g = -1, force = -1;
+
+    send_batch(c, q, (const void *const[]){NULL, NULL, NULL},
+               (const size_t[]){0, 0, 0}, 3);
+    CHECK_EQ(next_of(c, q[0], &fl), WSG_E_SUCCESS);
+    CHECK_EQ((uint32_t)fl & mask, want);
+    CHECK_EQ(next_of(c, q[1], &g), WSG_E_SUCCESS);
+    CHECK_EQ(g, gs);
+    CHECK_EQ(next_of(c, q[2], &force), WSG_E_SUCCESS);
+    CHECK_NEAR(force, f, 1e-3);
+}
+
+/* The control channel's promise, command by command, with time paused so
+ * that no model step can do the work: its effects are there when its
+ * answer is. */
+static void test_world_at_once(struct emu_client *c, struct ctl *k)
+{
+    const uint32_t mb =
+        WSG_SF_MOVING | WSG_SF_BLOCKED_MINUS | WSG_SF_BLOCKED_PLUS;
+    uint8_t p[16], dir = WSG_HOME_POSITIVE;
+    double lost;
+    size_t n;
+
+    CMD_OK(k, "time pause");
+    CHECK_EQ(motion_paused(c, k, WSG_CMD_HOMING, &dir, 1), WSG_E_SUCCESS);
+
+    /* part none while holding: lost, the fingers on their way through the
+     * clamping travel, no force */
+    CMD_OK(k, "part 40");
+    n = emu_grasp_payload(p, 40.0f, 100.0f);
+    CHECK_EQ(motion_paused(c, k, WSG_CMD_GRASP, p, n), WSG_E_SUCCESS);
+    expect_now(c, mb, WSG_SF_BLOCKED_MINUS, WSG_GS_HOLDING, 40.0);
+    lost = ctl_json_num(ctl_state(k), "lost_part");
+    CMD_OK(k, "part none");
+    expect_now(c, mb, WSG_SF_MOVING, WSG_GS_PART_LOST, 0.0);
+    CHECK_EQ(ctl_json_num(ctl_state(k), "lost_part"), lost + 1);
+    CMD_OK(k, "time step 3000");
+
+    /* obstacle none under a clamp: the fingers snap on towards the target
+     * at once */
+    CMD_OK(k, "obstacle 50");
+    n = emu_move_payload(p, 0, 70.0f, 100.0f);
+    CHECK_EQ(motion_paused(c, k, WSG_CMD_PREPOSITION, p, n),
+             WSG_E_AXIS_BLOCKED);
+    expect_now(c, mb, WSG_SF_BLOCKED_PLUS, WSG_GS_IDLE, 40.0);
+    CMD_OK(k, "obstacle none");
+    expect_now(c, mb, WSG_SF_MOVING, WSG_GS_IDLE, 0.0);
+    CMD_OK(k, "time step 3000");
+    CHECK_NEAR(ctl_json_num(ctl_state(k), "width"), 70.0, 1e-3);
+
+    /* an obstacle placed where the fingers hold nothing changes nothing
+     * until they reach it */
+    CMD_OK(k, "obstacle 60");
+    expect_now(c, mb, 0, WSG_GS_IDLE, 0.0);
+    CMD_OK(k, "obstacle none");
+
+    /* a temperature fault while holding: the grip goes at once */
+    CMD_OK(k, "part 40");
+    n = emu_grasp_payload(p, 40.0f, 100.0f);
+    CHECK_EQ(motion_paused(c, k, WSG_CMD_GRASP, p, n), WSG_E_SUCCESS);
+    CMD_OK(k, "fault temp-fault on");
+    expect_now(c, WSG_SF_TEMP_FAULT | mb,
+               WSG_SF_TEMP_FAULT | WSG_SF_BLOCKED_MINUS, WSG_GS_ERROR, 0.0);
+    CMD_OK(k, "fault temp-fault off");
+    expect_now(c, WSG_SF_TEMP_FAULT, 0, WSG_GS_ERROR, 0.0);
+    CMD_OK(k, "part none");
+
+    /* a power cycle: not referenced, idle, at once */
+    CMD_OK(k, "reset");
+    expect_now(c, WSG_SF_REFERENCED | mb, 0, WSG_GS_IDLE, 0.0);
+    CHECK_EQ(motion_paused(c, k, WSG_CMD_HOMING, &dir, 1), WSG_E_SUCCESS);
+    CMD_OK(k, "time resume");
+    emu_drop_kept(c);
+}
+
 static void test_scale(struct emu_client *c, struct ctl *k)
 {
     int st = move_to(c, 10.0f, 400.0f);
@@ -603,8 +695,19 @@ static void test_drop(struct emu *e, struct emu_client *c, struct ctl *k)
     struct emu_client m;
     struct emu_frame f;
 
+    char line[1024];
+
     CHECK_EQ(flags_of(c) & WSG_SF_FAST_STOP, 0);
-    CHECK(strcmp(ctl_cmd(k, "drop"), "ok dropped 1") == 0);
+    /* With time paused, "drop" and "state" in one write: the close's FAST
+     * STOP is there when "ok dropped" is, not only after the batch. */
+    CMD_OK(k, "time pause");
+    REQUIRE(ctl_write(k, "drop\nstate\n") == 0);
+    REQUIRE(ctl_line(k, line, sizeof line) == 0);
+    CHECK(strcmp(line, "ok dropped 1") == 0);
+    REQUIRE(ctl_line(k, line, sizeof line) == 0);
+    CHECK((uint32_t)ctl_json_num(line, "flags") & WSG_SF_FAST_STOP);
+    CHECK(strstr(line, "\"fast_stop\"") != NULL);
+    CMD_OK(k, "time resume");
     /* The server closed: end of stream, not a timeout. */
     CHECK_EQ(emu_recv(c, &f, EMU_REPLY_MS), -1);
     CHECK(c->eof);
@@ -676,6 +779,7 @@ int main(int argc, char **argv)
     test_part_lost(&c, &k);
     test_faults(&c, &k);
     test_at_once(&e, &c, &k);
+    test_world_at_once(&c, &k);
     test_scale(&c, &k);
     test_drop(&e, &c, &k);
     test_reset(&e, &k);
