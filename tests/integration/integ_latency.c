@@ -16,6 +16,7 @@
  *   request, then exactly one per 10 ms;
  * - 64 KiB of packets wait per interface; what does not fit is dropped
  *   whole and counted (delay_dropped), the rest leaves intact;
+ * - a fleet (--grippers 2): each gripper's answers wait on its own;
  * - running (not paused) with --latency 20: a round trip takes 20 ms;
  * - --latency 0 (and 0:0) answers at once, as without the option;
  * - the config key "latency" works like the option; bad values end the
@@ -367,6 +368,30 @@ static void test_bound(void)
     CHECK_EQ(emu_stop(&e), 0);
 }
 
+/* In a fleet each gripper delays its own packets. */
+static void test_fleet(void)
+{
+    const char *args[] = {"--grippers", "2", "--latency", "5", NULL};
+    struct emu e;
+    struct emu_client c0, c1;
+    struct ctl k;
+
+    start(&e, args);
+    REQUIRE(ctl_open(&k, &e) == 0);
+    REQUIRE(emu_open_nth(&c0, &e, &emu_tcp, 0) == 0);
+    REQUIRE(emu_open_nth(&c1, &e, &emu_tcp, 1) == 0);
+    CMD_OK(&k, "time pause");
+    CMD_OK(&k, "gripper 1");
+    check_exact(&c1, &k, 5);
+    CMD_OK(&k, "gripper 0");
+    check_exact(&c0, &k, 5);
+    quiet(&c1);
+    emu_close(&c0);
+    emu_close(&c1);
+    ctl_close(&k);
+    CHECK_EQ(emu_stop(&e), 0);
+}
+
 /* Running in real time: the answer takes the latency. */
 static void test_running(void)
 {
@@ -521,6 +546,7 @@ int main(int argc, char **argv)
     test_jitter();
     test_stream();
     test_bound();
+    test_fleet();
     test_running();
     test_zero("0");
     test_zero("0:0");
