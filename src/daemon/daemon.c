@@ -105,7 +105,11 @@ static int open_gripper(struct wsg_daemon *d, struct wsg_gripper *g,
                        d->opt.grippers > 1 ? (int)index : -1);
     g->dev.lookup = gripper_lookup;
     g->dev.lookup_ctx = g;
-    wsg_gripper_set_latency(g, o.latency_ms, o.latency_jitter_ms);
+    r = wsg_gripper_set_latency(g, o.latency_ms, o.latency_jitter_ms);
+    if (r < 0) {
+        fprintf(stderr, "wsgemu: --latency: %s\n", strerror(-r));
+        return r;
+    }
 
     env.loop = &d->loop;
     env.dev = &g->dev;

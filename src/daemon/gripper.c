@@ -10,6 +10,8 @@
 
 #include <errno.h>
 #include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
 
 /* Mixed with the gripper's number: any fixed value does. */
 #define WSG_GRIPPER_SEED 0x5753473530ull /* "WSG50" */
@@ -38,21 +40,25 @@ static void gripper_delay(void *ctx, struct wsg_session *s, const uint8_t *pkt,
                 "wsgemu: %s: --latency: %s; dropping packets until those "
                 "waiting have left\n",
                 s->peer,
-                r == -ENOBUFS ? "64 KiB of packets waiting" : "no memory");
+                r == -ENOBUFS ? "64 KiB of packets waiting" : strerror(-r));
 }
 
-void wsg_gripper_set_latency(struct wsg_gripper *g, uint32_t ms,
-                             uint32_t jitter_ms)
+int wsg_gripper_set_latency(struct wsg_gripper *g, uint32_t ms,
+                            uint32_t jitter_ms)
 {
     unsigned i;
 
     if (ms == 0 && jitter_ms == 0)
-        return;
+        return 0;
+    g->delay = calloc(WSG_TRANSPORT_MAX, sizeof *g->delay);
+    if (!g->delay)
+        return -ENOMEM;
     for (i = 0; i < WSG_TRANSPORT_MAX; i++)
         wsg_delay_init(&g->delay[i], ms, jitter_ms,
                        WSG_GRIPPER_SEED ^ ((uint64_t)g->index << 8 | i));
     g->dev.delay = gripper_delay;
     g->dev.delay_ctx = g;
+    return 0;
 }
 
 static void gripper_out(void *ctx, uint32_t tag, const uint8_t *pkt,
@@ -70,7 +76,7 @@ void wsg_gripper_release(struct wsg_gripper *g)
 {
     size_t i;
 
-    if (!g->dev.delay)
+    if (!g->delay)
         return;
     for (i = 0; i < g->ntransports; i++)
         if (wsg_delay_pending(&g->delay[i]))
@@ -82,7 +88,7 @@ size_t wsg_gripper_delayed(const struct wsg_gripper *g)
 {
     size_t i, n = 0;
 
-    for (i = 0; i < g->ntransports; i++)
+    for (i = 0; g->delay && i < g->ntransports; i++)
         n += wsg_delay_pending(&g->delay[i]);
     return n;
 }
@@ -92,7 +98,7 @@ uint64_t wsg_gripper_delay_dropped(const struct wsg_gripper *g)
     uint64_t n = 0;
     size_t i;
 
-    for (i = 0; i < g->ntransports; i++)
+    for (i = 0; g->delay && i < g->ntransports; i++)
         n += g->delay[i].dropped;
     return n;
 }
@@ -100,13 +106,18 @@ uint64_t wsg_gripper_delay_dropped(const struct wsg_gripper *g)
 int wsg_gripper_busy(const struct wsg_gripper *g)
 {
     return wsg_device_busy(&g->dev) ||
-           (g->dev.delay && wsg_gripper_delayed(g) > 0);
+           (g->delay && wsg_gripper_delayed(g) > 0);
 }
 
 void wsg_gripper_fini(struct wsg_gripper *g)
 {
     size_t i;
 
+    if (!g->delay)
+        return;
     for (i = 0; i < WSG_TRANSPORT_MAX; i++)
         wsg_delay_fini(&g->delay[i]);
+    free(g->delay);
+    g->delay = NULL;
+    g->dev.delay = NULL;
 }

@@ -40,18 +40,18 @@ struct wsg_gripper {
     uint8_t active;
     uint8_t touched;
     struct wsg_log_tap tap; /* the communication log's view of it */
-    /* --latency: delay[i] holds what transports[i] is to send (unused,
-     * and empty, without a latency). */
-    struct wsg_delay delay[WSG_TRANSPORT_MAX];
+    /* --latency: delay[i] holds what transports[i] is to send; NULL
+     * without a latency, so a fleet pays nothing for the option. */
+    struct wsg_delay *delay;
 };
 
 /* Delay every packet of g by ms plus a draw of 0..jitter_ms (simulated
  * time), in order per interface. The draws are seeded from g's number and
  * the interface's place, so a run (and each gripper of a fleet) meets the
  * same delays for the same traffic. Call once, before anything is sent;
- * with both 0 nothing changes. */
-void wsg_gripper_set_latency(struct wsg_gripper *g, uint32_t ms,
-                             uint32_t jitter_ms);
+ * with both 0 nothing changes. Returns 0 or -ENOMEM. */
+int wsg_gripper_set_latency(struct wsg_gripper *g, uint32_t ms,
+                            uint32_t jitter_ms);
 /* Send what is due at g's simulated time, to sessions still there (a
  * session that is gone loses its packets). */
 void wsg_gripper_release(struct wsg_gripper *g);
@@ -61,7 +61,8 @@ int wsg_gripper_busy(const struct wsg_gripper *g);
  * was full (64 KiB). */
 size_t wsg_gripper_delayed(const struct wsg_gripper *g);
 uint64_t wsg_gripper_delay_dropped(const struct wsg_gripper *g);
-/* Free the delay lines (after the transports are closed). */
+/* Free the delay lines (after the transports are closed); safe on a
+ * gripper without them. */
 void wsg_gripper_fini(struct wsg_gripper *g);
 
 #endif

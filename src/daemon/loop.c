@@ -5,12 +5,11 @@
  * latency. l->grid counts the grid points passed: the simulated time of
  * every gripper that is stepped. A gripper with nothing to do (idle model,
  * no stream, no packet waiting to leave) is off the active list and not
- * stepped; its device time lags
- * and is brought to the grid in one wsg_device_advance_idle call when an
- * event or the control channel touches it, which keeps simulated time
- * (and with it stream and motion timing) on the same grid. With no active
- * gripper the timer is disarmed and the grid points that pass are counted
- * at the next wake.
+ * stepped; its device time lags and is brought to the grid in one
+ * wsg_device_advance_idle call when an event or the control channel
+ * touches it, which keeps simulated time (and with it stream and motion
+ * timing) on the same grid. With no active gripper the timer is disarmed
+ * and the grid points that pass are counted at the next wake.
  *
  * With a time scale X the grid's period is step / X of real time, and
  * below WSG_LOOP_PERIOD_MIN_NS a tick runs several steps instead, so
