@@ -33,7 +33,7 @@ if [ $# = 0 ]; then
         integ_disconnect:tcp integ_disconnect:udp integ_disconnect:pty \
         integ_streams:tcp integ_streams:udp integ_streams:pty \
         integ_udp integ_pty integ_control integ_settings integ_log \
-        integ_together integ_wsgctl integ_fleet
+        integ_latency integ_together integ_wsgctl integ_fleet
 fi
 
 if ! command -v valgrind >/dev/null 2>&1; then

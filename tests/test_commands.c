@@ -2,8 +2,9 @@
  * Every command of the set through the dispatcher: its success path and each
  * error code the manual lists for it that this gripper can produce, the
  * central state rules (FAST STOP, not referenced, already running, after a
- * Disconnect Announcement), clamping to the model's limits, and the
- * auto-update streams against the fake clock.
+ * Disconnect Announcement), clamping to the model's limits, the
+ * auto-update streams against the fake clock, and the output hook that
+ * takes every packet instead of the wire.
  */
 #include "tdev.h"
 
@@ -621,6 +622,101 @@ static void test_streams(void)
     CHECK_EQ(t.sess[0].s.nstreams, 0);
 }
 
+/* The output hook: what it was given, in order, and what was logged. */
+struct hook_seen {
+    int n;
+    uint8_t id[8];
+    uint32_t tag[8];
+    int traced;
+};
+
+static void hook_delay(void *ctx, struct wsg_session *s, const uint8_t *pkt,
+                       size_t len)
+{
+    struct hook_seen *h = ctx;
+
+    REQUIRE(h->n < 8);
+    REQUIRE(len > 3);
+    h->id[h->n] = pkt[3];
+    h->tag[h->n] = s->tag;
+    h->n++;
+}
+
+static void hook_trace(void *ctx, const struct wsg_session *s,
+                       const uint8_t *pkt, size_t len)
+{
+    struct hook_seen *h = ctx;
+
+    (void)s;
+    (void)pkt;
+    (void)len;
+    h->traced++;
+}
+
+/* A request into session i, whatever it is answered. */
+static void feed_cmd(struct tdev *t, int i, uint8_t id, const void *payload,
+                     size_t len)
+{
+    uint8_t pkt[WSG_HEADER_LEN + 16 + WSG_CRC_LEN];
+    size_t n = wsg_frame_encode(pkt, sizeof pkt, id, payload, len);
+
+    REQUIRE(n > 0);
+    tdev_feed(t, i, pkt, n);
+}
+
+static void test_output_hook(void)
+{
+    struct tdev t;
+    struct hook_seen h;
+    uint8_t p[3], dir = 0, pkt[16];
+    size_t n;
+    int i;
+
+    memset(&h, 0, sizeof h);
+    tdev_init(&t);
+    t.dev.delay = hook_delay;
+    t.dev.delay_ctx = &h;
+    t.dev.trace_out = hook_trace;
+    t.dev.trace_ctx = &h;
+    /* A reply, a motion's pending answer and its final result, and a
+     * stream's packets all go to the hook, none to the wire or the log
+     * (the log shows a packet when it leaves). */
+    feed_cmd(&t, 0, WSG_CMD_GET_WIDTH, NULL, 0);
+    CHECK_EQ(h.n, 1);
+    CHECK_EQ(h.id[0], WSG_CMD_GET_WIDTH);
+    CHECK_EQ(h.tag[0], 1);
+    feed_cmd(&t, 1, WSG_CMD_HOMING, &dir, 1);
+    CHECK_EQ(h.n, 2);
+    CHECK_EQ(h.tag[1], 2);
+    for (i = 0; i < 10000 && h.n < 3; i++)
+        wsg_device_step(&t.dev);
+    CHECK_EQ(h.n, 3);
+    CHECK_EQ(h.id[2], WSG_CMD_HOMING);
+    CHECK_EQ(h.tag[2], 2);
+    p[0] = 1;
+    wsg_put_u16(p + 1, 10);
+    feed_cmd(&t, 0, WSG_CMD_GET_FORCE, p, 3);
+    CHECK_EQ(h.n, 4);
+    for (i = 0; i < 10; i++) {
+        wsg_device_step(&t.dev);
+        wsg_device_poll_streaming(&t.dev);
+    }
+    CHECK_EQ(h.n, 5);
+    CHECK_EQ(h.id[4], WSG_CMD_GET_FORCE);
+    CHECK_EQ(t.sess[0].n, 0);
+    CHECK_EQ(t.sess[1].n, 0);
+    CHECK_EQ(h.traced, 0);
+
+    /* What the hook hands back goes on the wire through the log. */
+    n = wsg_frame_encode_reply(pkt, sizeof pkt, WSG_CMD_LOOP, WSG_E_SUCCESS,
+                               NULL, 0);
+    REQUIRE(n > 0);
+    wsg_device_transmit(&t.dev, &t.sess[1].s, pkt, n);
+    CHECK_EQ(h.traced, 1);
+    CHECK_EQ(t.sess[1].n, 1);
+    CHECK_EQ(t.sess[1].pkts[0].id, WSG_CMD_LOOP);
+}
+
 int main(void)
 {
     test_loop();
@@ -637,5 +733,6 @@ int main(void)
     test_grasp_stats();
     test_system_config();
     test_streams();
+    test_output_hook();
     TEST_EXIT();
 }

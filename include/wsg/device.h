@@ -7,7 +7,9 @@
  * bytes to wsg_device_input and sends what comes back through the session's
  * send callback, one call per packet. Final results of motion commands are
  * routed by session tag through the lookup callback, because the peer that
- * asked may have gone by the time the motion ends.
+ * asked may have gone by the time the motion ends. An optional output hook
+ * takes every packet instead, for whoever makes the gripper answer later
+ * (the daemon's --latency); it hands them on through wsg_device_transmit.
  */
 #ifndef WSG_DEVICE_H
 #define WSG_DEVICE_H
@@ -85,6 +87,13 @@ struct wsg_device {
     /* Resolve a session tag for a final result; NULL when it is gone. */
     struct wsg_session *(*lookup)(void *ctx, uint32_t tag);
     void *lookup_ctx;
+    /* Output hook (NULL: off, every packet leaves at once): takes every
+     * packet the gripper sends (replies, final results, stream packets)
+     * when it is due, and sends it later with wsg_device_transmit. It
+     * must not keep s or pkt beyond the call, only s->tag and a copy. */
+    void (*delay)(void *ctx, struct wsg_session *s, const uint8_t *pkt,
+                  size_t len);
+    void *delay_ctx;
     struct wsg_session *streaming; /* sessions with nstreams > 0 */
 };
 
@@ -99,6 +108,12 @@ void wsg_session_init(struct wsg_session *s, uint32_t tag, unsigned flags,
  * it. The transport must no longer resolve s's tag (its lookup returns
  * NULL), since a motion s owned ends here. */
 void wsg_device_session_closed(struct wsg_device *d, struct wsg_session *s);
+
+/* Put one packet on the wire now: the communication log's trace_out, then
+ * s->send. What the device sends goes through here, directly or, with an
+ * output hook, when the hook releases it. */
+void wsg_device_transmit(struct wsg_device *d, struct wsg_session *s,
+                         const uint8_t *pkt, size_t len);
 
 /* Feed received bytes: every frame, checksum error and oversize is
  * dispatched and answered through s->send. */

@@ -8,6 +8,10 @@
  * tag back into a session, or NULL if the peer is gone and the result has
  * no one to go to. Streams are polled after each step against simulated
  * time, so they keep their period under any time scale.
+ *
+ * Every packet leaves through emit: at once, or into the output hook when
+ * one is set, which transmits it later. Either way the log sees a packet
+ * when it goes on the wire, not when it was made.
  */
 #include <math.h>
 #include <string.h>
@@ -110,6 +114,24 @@ void wsg_device_end_streams(struct wsg_device *d)
         wsg_session_end_streams(d, d->streaming);
 }
 
+void wsg_device_transmit(struct wsg_device *d, struct wsg_session *s,
+                         const uint8_t *pkt, size_t len)
+{
+    if (d->trace_out)
+        d->trace_out(d->trace_ctx, s, pkt, len);
+    s->send(s, pkt, len);
+}
+
+/* A packet is due: to the hook if there is one, else on the wire. */
+static void wsg_device_emit(struct wsg_device *d, struct wsg_session *s,
+                            const uint8_t *pkt, size_t len)
+{
+    if (d->delay)
+        d->delay(d->delay_ctx, s, pkt, len);
+    else
+        wsg_device_transmit(d, s, pkt, len);
+}
+
 void wsg_device_reply(struct wsg_device *d, struct wsg_session *s, uint8_t id,
                       uint16_t status, const uint8_t *params, size_t len)
 {
@@ -119,11 +141,8 @@ void wsg_device_reply(struct wsg_device *d, struct wsg_session *s, uint8_t id,
 
     if (status != WSG_E_CMD_PENDING)
         d->cmd_failure = status != WSG_E_SUCCESS;
-    if (!n)
-        return;
-    if (d->trace_out)
-        d->trace_out(d->trace_ctx, s, pkt, n);
-    s->send(s, pkt, n);
+    if (n)
+        wsg_device_emit(d, s, pkt, n);
 }
 
 void wsg_device_input(struct wsg_device *d, struct wsg_session *s,
@@ -222,9 +241,7 @@ void wsg_device_poll_streams(struct wsg_device *d, struct wsg_session *s)
             st->due_us = now + st->period_us;
         n = wsg_frame_encode_reply(pkt, sizeof pkt, wsg_stream_cmd[i],
                                    WSG_E_SUCCESS, params, len);
-        if (d->trace_out)
-            d->trace_out(d->trace_ctx, s, pkt, n);
-        s->send(s, pkt, n);
+        wsg_device_emit(d, s, pkt, n);
     }
 }
 

@@ -371,7 +371,8 @@ static void append(char *buf, size_t cap, size_t *used, const char *fmt, ...)
 
 static void cmd_state(struct wsg_ctl_client *c)
 {
-    const struct wsg_device *d = &c->ctl->cur->dev;
+    const struct wsg_gripper *g = c->ctl->cur;
+    const struct wsg_device *d = &g->dev;
     const struct wsg_axis *ax = &d->axis;
     const struct wsg_loop *l = c->ctl->loop;
     uint32_t flags =
@@ -399,13 +400,15 @@ static void cmd_state(struct wsg_ctl_client *c)
     append(buf, sizeof buf, &used,
            "],\"grasp_state\":%u,\"grasp_state_name\":\"%s\","
            "\"stats\":{\"total\":%lu,\"no_part\":%u,\"lost_part\":%u},"
-           "\"time\":%s,\"paused\":%s,\"scale\":%g}",
+           "\"time\":%s,\"paused\":%s,\"scale\":%g,"
+           "\"delayed\":%lu,\"delay_dropped\":%llu}",
            gs,
            gs < sizeof grasp_names / sizeof grasp_names[0] ? grasp_names[gs]
                                                            : "unknown",
            (unsigned long)ax->stats.total, (unsigned)ax->stats.no_part,
            (unsigned)ax->stats.lost_part, t, l->paused ? "true" : "false",
-           l->scale);
+           l->scale, (unsigned long)wsg_gripper_delayed(g),
+           (unsigned long long)wsg_gripper_delay_dropped(g));
     reply(c, "ok %s", buf);
 }
 

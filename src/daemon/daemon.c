@@ -105,6 +105,11 @@ static int open_gripper(struct wsg_daemon *d, struct wsg_gripper *g,
                        d->opt.grippers > 1 ? (int)index : -1);
     g->dev.lookup = gripper_lookup;
     g->dev.lookup_ctx = g;
+    r = wsg_gripper_set_latency(g, o.latency_ms, o.latency_jitter_ms);
+    if (r < 0) {
+        fprintf(stderr, "wsgemu: --latency: %s\n", strerror(-r));
+        return r;
+    }
 
     env.loop = &d->loop;
     env.dev = &g->dev;
@@ -288,6 +293,8 @@ static void close_gripper(struct wsg_gripper *g)
 
         t->ops->close(t);
     }
+    /* What still waits has no one to go to. */
+    wsg_gripper_fini(g);
 }
 
 void wsg_daemon_close(struct wsg_daemon *d)

@@ -4,12 +4,12 @@
  * models' simulated time tracks the wall clock without drift from wake-up
  * latency. l->grid counts the grid points passed: the simulated time of
  * every gripper that is stepped. A gripper with nothing to do (idle model,
- * no stream) is off the active list and not stepped; its device time lags
- * and is brought to the grid in one wsg_device_advance_idle call when an
- * event or the control channel touches it, which keeps simulated time
- * (and with it stream and motion timing) on the same grid. With no active
- * gripper the timer is disarmed and the grid points that pass are counted
- * at the next wake.
+ * no stream, no packet waiting to leave) is off the active list and not
+ * stepped; its device time lags and is brought to the grid in one
+ * wsg_device_advance_idle call when an event or the control channel
+ * touches it, which keeps simulated time (and with it stream and motion
+ * timing) on the same grid. With no active gripper the timer is disarmed
+ * and the grid points that pass are counted at the next wake.
  *
  * With a time scale X the grid's period is step / X of real time, and
  * below WSG_LOOP_PERIOD_MIN_NS a tick runs several steps instead, so
@@ -256,7 +256,7 @@ void wsg_loop_touch(struct wsg_loop *l, struct wsg_gripper *g)
 
 void wsg_loop_check(struct wsg_loop *l, struct wsg_gripper *g)
 {
-    if (g->active || !wsg_device_busy(&g->dev))
+    if (g->active || !wsg_gripper_busy(g))
         return;
     sync_time(l, g);
     g->active = 1;
@@ -266,8 +266,9 @@ void wsg_loop_check(struct wsg_loop *l, struct wsg_gripper *g)
 }
 
 /* One grid step, k model steps per active gripper (a tick at a fast time
- * scale runs several): each is stepped, its streams polled, and it leaves
- * the list when nothing is left to do. */
+ * scale runs several): each is stepped, its streams polled, what its delay
+ * lines hold for that moment sent (--latency), and it leaves the list when
+ * nothing is left to do. */
 static void run_steps(struct wsg_loop *l, unsigned k)
 {
     struct wsg_gripper **pp = &l->active;
@@ -279,10 +280,11 @@ static void run_steps(struct wsg_loop *l, unsigned k)
         for (i = 0; i < k; i++) {
             wsg_device_step(&g->dev);
             wsg_device_poll_streaming(&g->dev);
+            wsg_gripper_release(g);
         }
         l->dev_steps += k;
         g->at += k;
-        if (wsg_device_busy(&g->dev)) {
+        if (wsg_gripper_busy(g)) {
             pp = &g->next_active;
         } else {
             *pp = g->next_active;

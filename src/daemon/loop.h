@@ -2,8 +2,9 @@
  * The daemon's single epoll loop: the transports' file descriptors, a
  * timerfd that paces the models' fixed steps on an absolute grid, and a
  * signalfd for SIGINT/SIGTERM. It serves one gripper or a fleet of them
- * (--grippers). Only grippers whose model has work or whose sessions
- * stream auto-updates are on the active list and stepped; the timer runs
+ * (--grippers). Only grippers whose model has work, whose sessions
+ * stream auto-updates or that have packets waiting to leave (--latency)
+ * are on the active list and stepped; the timer runs
  * only while that list is not empty, so an idle emulator does not wake and
  * a fleet costs what moves, not what exists.
  *
@@ -109,9 +110,10 @@ int wsg_loop_set_scale(struct wsg_loop *l, double scale);
 int wsg_loop_pause(struct wsg_loop *l);
 /* Run simulated time again from now, keeping the model's time. */
 int wsg_loop_resume(struct wsg_loop *l);
-/* While paused: run nsteps grid steps right away, each a model step and
- * the stream polls of every active gripper (steps with nothing active are
- * only counted). Returns 0, or -EBUSY when not paused. */
+/* While paused: run nsteps grid steps right away, each a model step, the
+ * stream polls and the release of delayed packets of every active gripper
+ * (steps with nothing active are only counted). Returns 0, or -EBUSY when
+ * not paused. */
 int wsg_loop_step(struct wsg_loop *l, uint64_t nsteps);
 /* Serve until SIGINT or SIGTERM: returns 0 then, -errno on failure. */
 int wsg_loop_run(struct wsg_loop *l);

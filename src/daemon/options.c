@@ -9,7 +9,8 @@
 
 #include "options.h"
 
-#include "loop.h" /* the time scales it runs */
+#include "delay.h" /* the latencies it takes */
+#include "loop.h"  /* the time scales it runs */
 #include "wsg/device.h"
 
 #include <arpa/inet.h>
@@ -46,7 +47,8 @@ enum {
     OPT_CONFIG,
     OPT_MAX_CLIENTS,
     OPT_GRIPPERS,
-    OPT_FORCE_SENSOR
+    OPT_FORCE_SENSOR,
+    OPT_LATENCY
 };
 
 /* The config file's keys are these names too (without the dashes). */
@@ -73,6 +75,7 @@ static const struct option long_options[] = {
     {"tag", required_argument, NULL, OPT_TAG},
     {"part", required_argument, NULL, OPT_PART},
     {"time-scale", required_argument, NULL, OPT_TIME_SCALE},
+    {"latency", required_argument, NULL, OPT_LATENCY},
     {"control", required_argument, NULL, OPT_CONTROL},
     {"log", required_argument, NULL, OPT_LOG},
     {"config", required_argument, NULL, OPT_CONFIG},
@@ -147,6 +150,11 @@ static void usage(FILE *f)
         "                             (%u..%u, default %u)\n"
         "  --time-scale X             simulated seconds per real second\n"
         "                             (0.001..1000, default 1)\n"
+        "  --latency MS[:JITTER]      every packet the gripper sends\n"
+        "                             leaves MS ms of simulated time late,\n"
+        "                             plus 0..JITTER ms drawn from a fixed\n"
+        "                             seed, in order (0..%u each; default\n"
+        "                             0: at once)\n"
         "  --log FILE                 communication log: one line per\n"
         "                             packet; '-' for stderr\n"
         "  --config FILE              read settings from FILE first; the\n"
@@ -178,7 +186,7 @@ static void usage(FILE *f)
         "gripper field lists N values, comma-separated, in gripper order).\n"
         "SIGINT or SIGTERM stops the emulator with exit status 0.\n",
         WSG_STEP_US_MIN, WSG_STEP_US_MAX, WSG_STEP_US_DEFAULT,
-        WSG_GRIPPERS_MAX);
+        WSG_DELAY_MS_MAX, WSG_GRIPPERS_MAX);
 }
 
 /* Decimal digits only: strtoul would also take signs, spaces and hex. */
@@ -552,6 +560,31 @@ static int set_option(struct wsg_options *o, int id, const char *val,
                  "'%s' is not WIDTH[:STIFFNESS] with a WIDTH in mm >= 0 and "
                  "a STIFFNESS in N/mm > 0",
                  val);
+        return -1;
+    }
+    case OPT_LATENCY: {
+        const char *colon = strchr(val, ':');
+        unsigned long ms, jitter = 0;
+        char buf[16];
+        size_t n = colon ? (size_t)(colon - val) : strlen(val);
+
+        /* Whole milliseconds, decimal digits only: the delay runs on the
+         * model's step grid, and a fraction would only look precise. */
+        if (n >= sizeof buf)
+            goto bad_latency;
+        memcpy(buf, val, n);
+        buf[n] = '\0';
+        if (parse_uint(buf, WSG_DELAY_MS_MAX, &ms) < 0 ||
+            (colon && parse_uint(colon + 1, WSG_DELAY_MS_MAX, &jitter) < 0))
+            goto bad_latency;
+        o->latency_ms = (uint32_t)ms;
+        o->latency_jitter_ms = (uint32_t)jitter;
+        break;
+    bad_latency:
+        snprintf(err, errcap,
+                 "'%s' is not MS[:JITTER] with MS and JITTER whole "
+                 "milliseconds in 0..%u",
+                 val, WSG_DELAY_MS_MAX);
         return -1;
     }
     case OPT_TIME_SCALE:

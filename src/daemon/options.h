@@ -67,6 +67,10 @@ struct wsg_options {
     int check_crc;                 /* 0 with --no-crc */
     int disconnect_fast_stop;      /* 0 with --no-disconnect-fast-stop */
     int force_sensor;              /* --force-sensor on: tare, D9 */
+    /* --latency MS[:JITTER]: what the gripper sends leaves MS plus up to
+     * JITTER ms of simulated time late (0: at once, no delay line). */
+    uint32_t latency_ms;
+    uint32_t latency_jitter_ms;
     uint32_t step_us;
     const char *model; /* NULL: the default model */
     /* The web page's settings; negative (homing_dir: WSG_HOME_DEFAULT)

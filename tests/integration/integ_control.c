@@ -220,13 +220,14 @@ static void test_ready_and_state(struct emu *e, struct ctl *k)
 
     const char *js = ctl_state(k);
     static const char *const keys[] = {
-        "\"width\":",       "\"speed\":",
-        "\"force\":",       "\"temperature\":",
-        "\"flags\":",       "\"flag_names\":",
-        "\"grasp_state\":", "\"grasp_state_name\":",
-        "\"stats\":",       "\"total\":",
-        "\"no_part\":",     "\"lost_part\":",
-        "\"time\":"};
+        "\"width\":",        "\"speed\":",
+        "\"force\":",        "\"temperature\":",
+        "\"flags\":",        "\"flag_names\":",
+        "\"grasp_state\":",  "\"grasp_state_name\":",
+        "\"stats\":",        "\"total\":",
+        "\"no_part\":",      "\"lost_part\":",
+        "\"time\":",         "\"delayed\":",
+        "\"delay_dropped\":"};
     CHECK(json_valid_object(js));
     for (size_t i = 0; i < sizeof keys / sizeof keys[0]; i++) {
         if (!strstr(js, keys[i]))

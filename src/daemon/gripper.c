@@ -1,0 +1,123 @@
+/*
+ * A gripper's latency (--latency): the device's output hook puts every
+ * packet into the delay line of the interface its session belongs to (the
+ * session tag names the transport), and the loop calls the release after
+ * each of the gripper's steps, which sends what is due to the session the
+ * tag still names. The delay is measured in the gripper's simulated time,
+ * so it scales, pauses and steps with everything else.
+ */
+#include "gripper.h"
+
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* Mixed with the gripper's number: any fixed value does. */
+#define WSG_GRIPPER_SEED 0x5753473530ull /* "WSG50" */
+
+static void gripper_delay(void *ctx, struct wsg_session *s, const uint8_t *pkt,
+                          size_t len)
+{
+    struct wsg_gripper *g = ctx;
+    uint32_t idx = s->tag >> WSG_TAG_TRANSPORT_SHIFT;
+    struct wsg_delay *dl;
+    int r;
+
+    /* Every session's tag names one of g's transports; a packet for one
+     * that did not would wait where no release looks, so it goes now. */
+    if (idx == 0 || idx > g->ntransports) {
+        wsg_device_transmit(&g->dev, s, pkt, len);
+        return;
+    }
+    dl = &g->delay[idx - 1];
+    r = wsg_delay_push(dl, g->dev.axis.time_us, s->tag, pkt, len);
+    if (r == 1)
+        wsg_device_transmit(&g->dev, s, pkt, len);
+    else if (r < 0 && dl->burst == 1)
+        /* Once per burst: it goes on until the line has emptied. */
+        fprintf(stderr,
+                "wsgemu: %s: --latency: %s; dropping packets until those "
+                "waiting have left\n",
+                s->peer,
+                r == -ENOBUFS ? "64 KiB of packets waiting" : strerror(-r));
+}
+
+int wsg_gripper_set_latency(struct wsg_gripper *g, uint32_t ms,
+                            uint32_t jitter_ms)
+{
+    unsigned i;
+
+    if (ms == 0 && jitter_ms == 0)
+        return 0;
+    g->delay = calloc(WSG_TRANSPORT_MAX, sizeof *g->delay);
+    if (!g->delay)
+        return -ENOMEM;
+    for (i = 0; i < WSG_TRANSPORT_MAX; i++)
+        wsg_delay_init(&g->delay[i], ms, jitter_ms,
+                       WSG_GRIPPER_SEED ^ ((uint64_t)g->index << 8 | i));
+    g->dev.delay = gripper_delay;
+    g->dev.delay_ctx = g;
+    return 0;
+}
+
+static void gripper_out(void *ctx, uint32_t tag, const uint8_t *pkt,
+                        size_t len)
+{
+    struct wsg_gripper *g = ctx;
+    struct wsg_session *s =
+        g->dev.lookup ? g->dev.lookup(g->dev.lookup_ctx, tag) : NULL;
+
+    if (s)
+        wsg_device_transmit(&g->dev, s, pkt, len);
+}
+
+void wsg_gripper_release(struct wsg_gripper *g)
+{
+    size_t i;
+
+    if (!g->delay)
+        return;
+    for (i = 0; i < g->ntransports; i++)
+        if (wsg_delay_pending(&g->delay[i]))
+            wsg_delay_release(&g->delay[i], g->dev.axis.time_us, gripper_out,
+                              g);
+}
+
+size_t wsg_gripper_delayed(const struct wsg_gripper *g)
+{
+    size_t i, n = 0;
+
+    for (i = 0; g->delay && i < g->ntransports; i++)
+        n += wsg_delay_pending(&g->delay[i]);
+    return n;
+}
+
+uint64_t wsg_gripper_delay_dropped(const struct wsg_gripper *g)
+{
+    uint64_t n = 0;
+    size_t i;
+
+    for (i = 0; g->delay && i < g->ntransports; i++)
+        n += g->delay[i].dropped;
+    return n;
+}
+
+int wsg_gripper_busy(const struct wsg_gripper *g)
+{
+    return wsg_device_busy(&g->dev) ||
+           (g->delay && wsg_gripper_delayed(g) > 0);
+}
+
+void wsg_gripper_fini(struct wsg_gripper *g)
+{
+    size_t i;
+
+    if (!g->delay)
+        return;
+    for (i = 0; i < WSG_TRANSPORT_MAX; i++)
+        wsg_delay_fini(&g->delay[i]);
+    free(g->delay);
+    g->delay = NULL;
+    g->dev.delay = NULL;
+}
