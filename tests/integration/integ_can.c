@@ -204,7 +204,8 @@ static void check_open_fails(const char *exe, const char *iface,
 {
     const char *args[] = {"--can", iface, NULL};
     char out[512], err[1024];
-    int st = emu_run(exe, args, 5000, out, sizeof out, err, sizeof err);
+    int st =
+        emu_run(exe, args, emu_ms(5000), out, sizeof out, err, sizeof err);
 
     printf("--can %s: status %d: %s", iface, st, err);
     CHECK_EQ(st, 1);

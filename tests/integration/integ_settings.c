@@ -80,7 +80,7 @@ static void check_group1(const char *const *args)
     CHECK_EQ(EMU_NPARAMS(&f), 6);
     CHECK(memcmp(EMU_PARAMS(&f), "cell 4", 6) == 0);
     /* Homing in the default direction (0) goes the configured way. */
-    CHECK_EQ(emu_motion(&c, WSG_CMD_HOMING, &dir, 1, 10000, &imm),
+    CHECK_EQ(emu_motion(&c, WSG_CMD_HOMING, &dir, 1, emu_ms(10000), &imm),
              WSG_E_SUCCESS);
     CHECK_EQ(imm, WSG_E_CMD_PENDING);
     CHECK_NEAR(get_float(&c, WSG_CMD_GET_WIDTH), 0.0, 0.01);
@@ -105,10 +105,11 @@ static void check_group2(const char *const *args)
         WSG_E_SUCCESS);
     CHECK_EQ(EMU_NPARAMS(&f), 32);
     CHECK_NEAR(wsg_get_f32(EMU_PARAMS(&f)), 68.0, 1e-3);
-    CHECK_EQ(emu_motion(&c, WSG_CMD_HOMING, &dir, 1, 10000, &imm),
+    CHECK_EQ(emu_motion(&c, WSG_CMD_HOMING, &dir, 1, emu_ms(10000), &imm),
              WSG_E_SUCCESS);
     n = emu_grasp_payload(p, 40.0f, 100.0f);
-    CHECK_EQ(emu_motion(&c, WSG_CMD_GRASP, p, n, 10000, &imm), WSG_E_SUCCESS);
+    CHECK_EQ(emu_motion(&c, WSG_CMD_GRASP, p, n, emu_ms(10000), &imm),
+             WSG_E_SUCCESS);
     CHECK_EQ(imm, WSG_E_CMD_PENDING);
     CHECK_EQ(
         emu_request(&c, WSG_CMD_GET_GRASP_STATE, NULL, 0, &f, EMU_REPLY_MS),
@@ -140,9 +141,10 @@ static void check_force_sensor(const char *const *args)
     REQUIRE(emu_open(&c, &e, &emu_tcp) == 0);
     CHECK_EQ(emu_request(&c, WSG_CMD_TARE, NULL, 0, NULL, EMU_REPLY_MS),
              WSG_E_SUCCESS);
-    CHECK_EQ(emu_motion(&c, WSG_CMD_HOMING, &dir, 1, 10000, &imm),
+    CHECK_EQ(emu_motion(&c, WSG_CMD_HOMING, &dir, 1, emu_ms(10000), &imm),
              WSG_E_SUCCESS);
-    CHECK_EQ(emu_motion(&c, WSG_CMD_GRASP, p, n, 10000, &imm), WSG_E_SUCCESS);
+    CHECK_EQ(emu_motion(&c, WSG_CMD_GRASP, p, n, emu_ms(10000), &imm),
+             WSG_E_SUCCESS);
     CHECK_EQ(
         emu_request(&c, WSG_CMD_GET_SYSTEM_STATE, NULL, 0, &f, EMU_REPLY_MS),
         WSG_E_SUCCESS);
@@ -172,7 +174,8 @@ static void test_version(void)
     static const char *const v[] = {"--version", NULL};
     char out[256], err[256];
 
-    CHECK_EQ(emu_run(exe, v, 5000, out, sizeof out, err, sizeof err), 0);
+    CHECK_EQ(emu_run(exe, v, emu_ms(5000), out, sizeof out, err, sizeof err),
+             0);
     CHECK(strncmp(out, "wsgemu ", 7) == 0 && strchr(out, '.') != NULL);
     CHECK(strchr(out, '\n') == out + strlen(out) - 1); /* one line */
 }
@@ -285,7 +288,8 @@ static void test_override(void)
 static void bad(const char *const *args, const char *want)
 {
     char out[512], err[1024];
-    int st = emu_run(exe, args, 5000, out, sizeof out, err, sizeof err);
+    int st =
+        emu_run(exe, args, emu_ms(5000), out, sizeof out, err, sizeof err);
 
     printf("%s %s: status %d, stderr \"%s\"\n", args[0],
            args[1] ? args[1] : "", st, err);
