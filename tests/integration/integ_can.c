@@ -196,6 +196,7 @@ static void test_ids(const char *exe, const char *iface)
     check_answers_on(exe, iface, NULL, 0x000);
     check_answers_on(exe, iface, "0x123", 0x123);
     check_answers_on(exe, iface, "291", 0x123);
+    check_answers_on(exe, iface, "010", 0x00A); /* decimal, not octal */
     check_answers_on(exe, iface, "0x7FE", 0x7FE);
 }
 

@@ -17,7 +17,9 @@
  * - --config FILE gives the same results; an option overrides the file,
  *   wherever --config stands on the command line;
  * - bad values exit 2 naming the valid range; a bad file line exits 2
- *   naming FILE:LINE.
+ *   naming FILE:LINE;
+ * - --can's ID is decimal (leading zeros too: 010 is ten, 08 eight) or 0x
+ *   hex, nothing else (no blanks, signs, octal or other prefixes).
  */
 /* mkstemp, fdopen */
 #define _POSIX_C_SOURCE 200809L
@@ -375,6 +377,46 @@ static void test_bad_files(void)
     bad_file("no-crc = perhaps\n", "1: no-crc");
 }
 
+/* --can IFACE:ID with ID given as id is read as the ID shown. Without a
+ * CAN bus here the value shows in the error of a fleet too large for it:
+ * 1024 grippers from ID take IDs up to ID + 2047, past 0x7FF for every ID
+ * from 2, and the message names ID in hex (it comes before any interface
+ * is opened). */
+static void can_id_read_as(const char *id, const char *shown)
+{
+    char arg[64], want[64];
+    const char *args[] = {"--grippers", "1024", "--can", arg, NULL};
+
+    snprintf(arg, sizeof arg, "nosuchcan9:%s", id);
+    snprintf(want, sizeof want, "CAN IDs %s..", shown);
+    bad(args, want);
+}
+
+static void test_can_id(void)
+{
+    static const char *const refused[] = {
+        "",     " 5",    "5 ",   "+5",
+        "-1",   "0x",    "x10",  "0x 1",
+        "0x1G", "1e2",   "0b1",  "0o7",
+        "2047", "0x7FF", "3000", "0x10000000000000000"};
+    char arg[64];
+    const char *args[] = {"--can", arg, NULL};
+    size_t i;
+
+    can_id_read_as("010", "0x00A");
+    can_id_read_as("08", "0x008");
+    can_id_read_as("0009", "0x009");
+    can_id_read_as("16", "0x010");
+    can_id_read_as("0x10", "0x010");
+    can_id_read_as("0X1f", "0x01F");
+    can_id_read_as("0x00a", "0x00A");
+    can_id_read_as("2046", "0x7FE");
+    for (i = 0; i < sizeof refused / sizeof refused[0]; i++) {
+        snprintf(arg, sizeof arg, "nosuchcan9:%s", refused[i]);
+        bad(args, "11-bit ID of 0..0x7FE");
+    }
+}
+
 int main(int argc, char **argv)
 {
     exe = emu_exe(argc, argv);
@@ -385,5 +427,6 @@ int main(int argc, char **argv)
     test_version();
     test_bad_values();
     test_bad_files();
+    test_can_id();
     TEST_EXIT();
 }
