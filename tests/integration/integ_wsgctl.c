@@ -16,6 +16,7 @@
  * - --version; an unknown option is named as unknown, a known one without
  *   its value as needing one; -q info prints bare values; decode tells a
  *   request from a reply;
+ * - numbers are decimal (010 is ten, 08 eight) or 0x hex, nothing else;
  * - the 07h of wsgctl's close aborts another client's running motion
  *   (manual 3.1.2), while --control reads width and state through the
  *   control channel without touching it;
@@ -261,6 +262,20 @@ static void test_raw(struct env *v)
     CHECK(has(v->out, "E_CMD_PENDING") && has(v->out, ": E_SUCCESS"));
     CHECK_EQ(TCP(v, "raw", "0x90"), 1);
     CHECK(has(v->out, "E_CMD_UNKNOWN") && has(v->err, "E_CMD_UNKNOWN"));
+    /* Numbers are decimal or 0x hex: a leading 0 makes no octal. */
+    CHECK_EQ(TCP(v, "raw", "06", "010", "08", "0x0A", "0X0b", "255"), 0);
+    CHECK(has(v->out, "06h Loop: E_SUCCESS\n"));
+    CHECK(has(v->out, "params (5): 0A 08 0A 0B FF\n"));
+    CHECK_EQ(TCP(v, "raw", "010"), 1); /* 0Ah: no command */
+    CHECK(has(v->out, "0Ah") && has(v->err, "E_CMD_UNKNOWN"));
+    /* Nothing else is a number: signs, blanks, a bare 0x, other prefixes,
+     * more than a byte. */
+    static const char *const no[] = {"+1",  " 1",  "1 ",  "0x",   "0x1G",
+                                     "0b1", "0o7", "256", "0x100"};
+    for (size_t i = 0; i < sizeof no / sizeof no[0]; i++) {
+        CHECK_EQ(TCP(v, "raw", "6", no[i]), 2);
+        CHECK(has(v->err, "bad item"));
+    }
 }
 
 static void test_decode(struct env *v)
@@ -320,6 +335,9 @@ static void test_watch(struct env *v)
     CHECK_EQ(TCP(v, "-q", "watch", "grasp", "--count", "2"), 0);
     CHECK_EQ(count_lines(v->out), 2);
     CHECK(has(v->out, " IDLE\n"));
+    /* --count 010 is ten, not octal eight. */
+    CHECK_EQ(TCP(v, "-q", "watch", "width", "10", "--count", "010"), 0);
+    CHECK_EQ(count_lines(v->out), 10);
     /* Until interrupted: SIGINT ends it with status 0. The lines it
      * printed before (some 12 in 0.6 s, fewer while wsgctl starts on a
      * slow machine, hence the scaled wait). */
