@@ -18,6 +18,13 @@ pkgs="$pkgs podman runc iproute2"
 # The Python client's tests (tests/python/run.sh): Debian's python3 makes a
 # venv that sees the system pytest, and pip installs python/ into it offline.
 pkgs="$pkgs python3 python3-venv python3-pytest"
+# The libFuzzer harnesses (tests/fuzz, the fuzz build of scripts/test.sh):
+# clang, and its fuzzer and sanitizer runtime, which clang only recommends.
+# The runtime's package carries clang's major version: the clang-N that the
+# clang package depends on (Debian 12: 14).
+clang_major=$(apt-cache depends clang 2>/dev/null |
+    sed -n 's/^ *Depends: clang-\([0-9][0-9]*\)$/\1/p' | head -n 1)
+pkgs="$pkgs clang libclang-rt-${clang_major:-14}-dev"
 # The CAN tests (tests/can/run.sh): where the host kernel has no vcan, QEMU
 # boots Debian's kernel with it; xz unpacks that kernel, iproute2's ip and
 # tc make the buses. The kernel and busybox themselves are only downloaded,

@@ -1,5 +1,5 @@
 #!/bin/bash
-# test.sh: build wsgemu twice and run every test in both builds:
+# test.sh: build wsgemu three times and run the tests of each build:
 #   build       the normal build (RelWithDebInfo), all of ctest, including
 #               `memcheck` (the daemon under valgrind over the integration
 #               tests that hold under it, tests/memcheck.sh);
@@ -7,10 +7,19 @@
 #               UndefinedBehaviorSanitizer, all of ctest again (memcheck is
 #               not registered there: valgrind cannot run ASan programs).
 #               Any sanitizer finding, in a test or in the daemon a test
-#               started, aborts that program, and the test fails.
-# Both runs always happen; the summary at the end says which failed, and the
-# exit status is non-zero if either did. Run scripts/deps.sh first.
-# Usage: scripts/test.sh [CTEST_ARGS...]   (passed to both ctest runs, e.g.
+#               started, aborts that program, and the test fails;
+#   build-fuzz  -DWSG_FUZZ=ON with clang: only the two libFuzzer harnesses
+#               (target fuzz_harnesses) and ctest's fuzz label: the seeds
+#               and regression inputs through each, then each fuzzed for
+#               60 s (WSG_FUZZ_SECONDS) from a copy of the seed corpus in
+#               build-fuzz (tests/fuzz/run.sh). A finding fails the test
+#               and is kept in build-fuzz/tests/fuzz/findings, hex-dumped
+#               in the log, with the command that adds it to
+#               tests/fuzz/regressions. Without clang or its libFuzzer
+#               runtime, the fuzz tests are skipped (exit 77) and say why.
+# Every run always happens; the summary at the end says which failed, and
+# the exit status is non-zero if any did. Run scripts/deps.sh first.
+# Usage: scripts/test.sh [CTEST_ARGS...]   (passed to every ctest run, e.g.
 #   -R integ_basic or -LE can)
 set -eu
 cd "$(dirname "$0")/.."
@@ -19,15 +28,22 @@ jobs=$(nproc 2>/dev/null || echo 2)
 results=()
 failed=0
 
-# run NAME DIR [CMAKE_ARGS...]: configure, build and test one build tree.
+# run NAME DIR [CMAKE_ARGS...]: configure, build and test one build tree;
+# $build_target (empty: everything) is what is built, $ctest_select more
+# ctest arguments (empty: every test).
+build_target=
+ctest_select=()
 run() {
     local name=$1 dir=$2 st=0 t0 t1
+    local target=(${build_target:+--target "$build_target"})
     shift 2
     echo "=== test.sh: $name: configure and build $dir"
     t0=$(date +%s)
-    if cmake -B "$dir" "$@" && cmake --build "$dir" --parallel "$jobs"; then
+    if cmake -B "$dir" "$@" &&
+        cmake --build "$dir" --parallel "$jobs" "${target[@]}"; then
         echo "=== test.sh: $name: ctest in $dir"
-        ctest --test-dir "$dir" --output-on-failure "${ctest_args[@]}" || st=$?
+        ctest --test-dir "$dir" --output-on-failure "${ctest_select[@]}" \
+            "${ctest_args[@]}" || st=$?
         [ "$st" = 0 ] || st="ctest failed (status $st)"
     else
         st="build failed"
@@ -52,6 +68,17 @@ run normal build -DWSG_SANITIZE=OFF
 export ASAN_OPTIONS=detect_leaks=1:abort_on_error=1
 export UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1
 run sanitizers build-asan -DWSG_SANITIZE=ON
+
+# The libFuzzer harnesses, and nothing else: the rest of the project was
+# tested above. Without clang, configured with the default compiler, the
+# fuzz tests are registered only to say they skip.
+fuzz_cc=()
+if command -v clang >/dev/null 2>&1; then
+    fuzz_cc=(-DCMAKE_C_COMPILER=clang)
+fi
+build_target=fuzz_harnesses
+ctest_select=(-L fuzz)
+run fuzz build-fuzz -DWSG_FUZZ=ON -DWSG_SANITIZE=OFF "${fuzz_cc[@]}"
 
 echo "=== test.sh: summary"
 for r in "${results[@]}"; do

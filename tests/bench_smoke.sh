@@ -9,6 +9,8 @@
 # machines are noisy, and the bench itself never fails on a missed target.
 #
 # Usage: bench_smoke.sh PATH/TO/wsgbench
+# Environment: WSG_TEST_TIME_SCALE (a number >= 1, default 1) multiplies the
+#   wait for the ready line, as in the C tests (tests/integration/emu.h).
 set -u
 
 bench=${1:?usage: bench_smoke.sh PATH/TO/wsgbench}
@@ -112,7 +114,9 @@ port=$((20000 + $$ % 10000))
 emu_pid=$!
 line=
 i=0
-while [ "$i" -lt 100 ]; do
+# Up to 10 s, scaled, in tenths.
+tenths=$(awk -v k="${WSG_TEST_TIME_SCALE:-1}" 'BEGIN { printf "%d", 100 * k }')
+while [ "$i" -lt "$tenths" ]; do
     if [ -s "$dir/ready" ] && [ "$(wc -l <"$dir/ready")" -ge 1 ]; then
         line=$(head -n 1 "$dir/ready")
         break

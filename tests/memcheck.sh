@@ -11,7 +11,8 @@
 #   INTEG_DIR holds the integration test programs; without TESTs, the list
 #   below. Exit status: 0 clean, 1 a test failed or valgrind reported
 #   something, 77 no valgrind here (skipped), 2 usage.
-# Environment: WSGCTL as for integ_wsgctl.
+# Environment: WSGCTL as for integ_wsgctl; WSG_TEST_TIME_SCALE (default
+#   here 10) multiplies the tests' waits.
 set -eu
 
 ME=memcheck.sh
@@ -44,6 +45,9 @@ fi
 LOGS=$(mktemp -d "${TMPDIR:-/tmp}/wsgemu-memcheck.XXXXXX")
 trap 'rm -rf "$LOGS"' EXIT
 export WSG_TEST_WRAPPER="valgrind --error-exitcode=99 --leak-check=full --errors-for-leak-kinds=definite,indirect --track-fds=no -q --log-file=$LOGS/vg.%p"
+# Every wait of the tests ten times as long (tests/integration/emu.h): the
+# programs run far slower under valgrind, more so on a loaded machine.
+export WSG_TEST_TIME_SCALE=${WSG_TEST_TIME_SCALE:-10}
 
 passed=0 failed=0 skipped=0 reports=0
 for t in "$@"; do

@@ -287,7 +287,9 @@ static void pin(int cpu)
 }
 
 /* Start exe (argv[0] is exe) with stdout on a pipe and wait for its ready
- * line. 0, or -1 with a message (the child is reaped). */
+ * line. 0, or -1 with a message; on failure everything taken here is given
+ * back (the child reaped, the pipe closed, the line freed), so a caller
+ * that gives up on the server has nothing to clean up. */
 static int server_start(struct bench *b, struct server *s, const char *name,
                         char *const *argv, int timeout_ms)
 {
@@ -300,9 +302,13 @@ static int server_start(struct bench *b, struct server *s, const char *name,
     s->pid = -1;
     s->out_fd = -1;
     s->line = malloc(cap);
-    if (!s->line || pipe2(po, O_CLOEXEC) < 0) {
-        msg("%s: %s", name, strerror(errno));
-        return -1;
+    if (!s->line) {
+        msg("%s: out of memory", name);
+        goto fail;
+    }
+    if (pipe2(po, O_CLOEXEC) < 0) {
+        msg("%s: pipe: %s", name, strerror(errno));
+        goto fail_line;
     }
     fflush(NULL);
     s->pid = fork();
@@ -321,13 +327,12 @@ static int server_start(struct bench *b, struct server *s, const char *name,
         _exit(127);
     }
     close(po[1]);
-    live_set(0, s->pid);
-    if (s->pid < 0) {
-        close(po[0]);
-        msg("%s: fork: %s", name, strerror(errno));
-        return -1;
-    }
     s->out_fd = po[0];
+    if (s->pid < 0) {
+        msg("%s: fork: %s", name, strerror(errno));
+        goto fail_pipe;
+    }
+    live_set(0, s->pid);
     for (;;) {
         struct pollfd p = {s->out_fd, POLLIN, 0};
         uint64_t now = now_ns();
@@ -336,7 +341,7 @@ static int server_start(struct bench *b, struct server *s, const char *name,
 
         if (now >= deadline) {
             msg("%s: no ready line within %d ms", name, timeout_ms);
-            goto fail;
+            goto fail_child;
         }
         if (poll(&p, 1, (int)((deadline - now) / NS_PER_MS) + 1) <= 0)
             continue;
@@ -344,7 +349,7 @@ static int server_start(struct bench *b, struct server *s, const char *name,
             char *bigger = realloc(s->line, cap * 2);
             if (!bigger) {
                 msg("%s: out of memory", name);
-                goto fail;
+                goto fail_child;
             }
             s->line = bigger;
             cap *= 2;
@@ -354,7 +359,7 @@ static int server_start(struct bench *b, struct server *s, const char *name,
             continue;
         if (n <= 0) {
             msg("%s (%s) exited before it was ready", name, argv[0]);
-            goto fail;
+            goto fail_child;
         }
         len += (size_t)n;
         s->line[len] = '\0';
@@ -366,14 +371,21 @@ static int server_start(struct bench *b, struct server *s, const char *name,
     }
     if (strncmp(s->line, "ready", 5) != 0) {
         msg("%s: unexpected first line \"%.80s\"", name, s->line);
-        goto fail;
+        goto fail_child;
     }
     return 0;
-fail:
+fail_child:
     kill(s->pid, SIGKILL);
     waitpid(s->pid, &st, 0);
     live_set(s->pid, 0);
     s->pid = -1;
+fail_pipe:
+    close(s->out_fd);
+    s->out_fd = -1;
+fail_line:
+    free(s->line);
+    s->line = NULL;
+fail:
     return -1;
 }
 

@@ -132,15 +132,37 @@ static int parse_float(const char *s, float *v)
     return 0;
 }
 
+/* Decimal digits, or 0x (0X) and hex digits, as WSG Commander and the
+ * documentation write numbers: strtoul with base 0 would read 010 as octal
+ * 8, refuse 08, and take blanks and signs. */
 static int parse_ulong(const char *s, unsigned long max, unsigned long *v)
 {
-    char *end;
+    unsigned long n = 0, base = 10;
 
-    if (*s == '-' || *s == '+' || *s == '\0')
+    if (s[0] == '0' && (s[1] == 'x' || s[1] == 'X')) {
+        base = 16;
+        s += 2;
+    }
+    if (*s == '\0')
         return -1;
-    errno = 0;
-    *v = strtoul(s, &end, 0); /* 0x.. hex, else decimal (and 0.. octal) */
-    return *end == '\0' && errno == 0 && *v <= max ? 0 : -1;
+    for (; *s; s++) {
+        unsigned long d;
+
+        if (*s >= '0' && *s <= '9')
+            d = (unsigned long)(*s - '0');
+        else if (base == 16 && *s >= 'a' && *s <= 'f')
+            d = (unsigned long)(*s - 'a' + 10);
+        else if (base == 16 && *s >= 'A' && *s <= 'F')
+            d = (unsigned long)(*s - 'A' + 10);
+        else
+            return -1;
+        /* n * base + d > max, asked without overflowing */
+        if (d > max || n > (max - d) / base)
+            return -1;
+        n = n * base + d;
+    }
+    *v = n;
+    return 0;
 }
 
 /* "HOST:PORT" (and ":LOCAL" for UDP) into its parts; host is copied. */

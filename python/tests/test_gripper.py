@@ -306,7 +306,7 @@ def test_replies_are_found_among_auto_update_packets(wsgemu):
     assert g.request(Cmd.GET_WIDTH, struct.pack("<BH", 0, 0)).status == 0
 
 
-def test_close_announces_the_disconnect(wsgemu):
+def test_close_announces_the_disconnect(wsgemu, time_scale):
     c = wsgemu.control
     with wsgemu.new_gripper() as g:
         g.home()
@@ -315,7 +315,7 @@ def test_close_announces_the_disconnect(wsgemu):
     # A client that just closes its socket puts the gripper into FAST STOP.
     s = socket.create_connection(wsgemu.tcp_addr)
     s.close()
-    deadline = time.monotonic() + 5
+    deadline = time.monotonic() + 5 * time_scale
     while not c.state()["flags"] & SystemFlag.SF_FAST_STOP:
         assert time.monotonic() < deadline, "no FAST STOP after a bare close"
         time.sleep(0.01)

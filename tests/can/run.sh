@@ -29,6 +29,7 @@
 #   WSG_CAN_VM_ACCEL      tcg or kvm (default: kvm only where the CPU shows
 #                         vmx/svm and /dev/kvm is usable)
 #   WSG_TEST_CAN_IFACE    the interface (default vcan0)
+#   WSG_TEST_TIME_SCALE   multiplies the tests' waits, in the VM too
 set -eu
 
 ME=run.sh
@@ -212,6 +213,9 @@ for t in "$@"; do
     echo "${t##*/}" >>"$R/wsg/tests"
 done
 echo "$TEST_TIMEOUT" >"$R/wsg/timeout"
+# The tests' time scale (tests/integration/emu.h), as the host's tests have
+# it: natively the tests inherit it.
+echo "${WSG_TEST_TIME_SCALE:-}" >"$R/wsg/time-scale"
 echo "$IFACE" >"$R/wsg/iface"
 echo "$SLOW_IFACE $SLOW_QDISC" >"$R/wsg/slow"
 
@@ -236,6 +240,8 @@ ip link set lo up
 ip link add dev "$iface" type vcan || bail "ip link add $iface"
 ip link set up dev "$iface" || bail "ip link set up $iface"
 export WSG_TEST_CAN_IFACE="$iface"
+scale=$(cat /wsg/time-scale)
+[ -z "$scale" ] || export WSG_TEST_TIME_SCALE="$scale"
 read -r slow qdisc </wsg/slow
 if [ -x /wsg/bin/tc ] && modprobe sch_tbf && ip link add dev $slow type vcan &&
     /wsg/bin/tc qdisc add dev $slow root $qdisc && ip link set up dev $slow; then

@@ -47,6 +47,40 @@ void emu_sleep_ms(int ms)
         ;
 }
 
+double emu_time_scale(void)
+{
+    static double scale; /* 0: not read yet */
+    const char *s, *w;
+    char *end;
+
+    if (scale > 0)
+        return scale;
+    s = getenv("WSG_TEST_TIME_SCALE");
+    if (s && *s) {
+        double x = strtod(s, &end);
+        /* Below 1 would shorten the bounds the tests were written with. */
+        if (*end != '\0' || !(x >= 1.0 && x <= 1000.0)) {
+            fprintf(stderr,
+                    "emu: WSG_TEST_TIME_SCALE=\"%s\": a number from 1 to "
+                    "1000\n",
+                    s);
+            exit(2);
+        }
+        scale = x;
+    } else {
+        /* valgrind runs the daemon some 20-50 times slower; what the tests
+         * wait for mostly waits on I/O, so 10 is enough (memcheck.sh). */
+        w = getenv("WSG_TEST_WRAPPER");
+        scale = w && strstr(w, "valgrind") ? 10.0 : 1.0;
+    }
+    return scale;
+}
+
+int emu_ms(int ms)
+{
+    return (int)(ms * emu_time_scale() + 0.5);
+}
+
 /* Milliseconds left until deadline, never negative. */
 static int remaining_ms(double deadline)
 {
@@ -310,7 +344,7 @@ static int start(struct emu *e, const char *exe, const char *const *args)
     e->line[n < sizeof(e->line) ? n : sizeof(e->line) - 1] = '\0';
     fprintf(stderr, "emu: stdout so far: \"%s\"\n", e->line);
     kill(e->pid, SIGKILL);
-    fprintf(stderr, "emu: daemon status %d\n", reap(e->pid, 3000));
+    fprintf(stderr, "emu: daemon status %d\n", reap(e->pid, EMU_EXIT_MS));
     close(e->out_fd);
     e->out_fd = -1;
     e->pid = 0;
@@ -351,11 +385,11 @@ int emu_stop_sig(struct emu *e, int sig)
     kill(e->pid, sig);
     /* The daemon closes stdout when it exits: drain until then, so that a
      * daemon blocked on a full pipe cannot miss its deadline. */
-    drain_stdout(e, emu_now_ms() + 3000);
-    int st = reap(e->pid, 3000);
+    drain_stdout(e, emu_now_ms() + EMU_EXIT_MS);
+    int st = reap(e->pid, EMU_EXIT_MS);
     if (st == -1)
-        fprintf(stderr, "emu: daemon did not exit within 3 s of signal %d\n",
-                sig);
+        fprintf(stderr, "emu: daemon did not exit within %d ms of signal %d\n",
+                EMU_EXIT_MS, sig);
     e->extra[e->extra_len] = '\0';
     if (e->out_fd >= 0)
         close(e->out_fd);

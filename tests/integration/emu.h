@@ -21,14 +21,36 @@
 
 #include "wsg/proto.h"
 
+/* Every wait below is a failure bound, not an expectation: how long to
+ * wait for what should come before calling it lost. A larger bound costs
+ * nothing when things work, so the bounds are generous for a loaded 2-core
+ * machine, and all of them are multiplied by one factor, emu_time_scale():
+ * $WSG_TEST_TIME_SCALE when set (a number >= 1), else 10 when the programs
+ * run under valgrind (WSG_TEST_WRAPPER names it; memcheck.sh), else 1.
+ * What a test expects NOT to see within a window is scaled the same way, so
+ * a slow daemon cannot make such a check pass by being late. Durations a
+ * test measures are another matter: each says how it is judged. */
+double emu_time_scale(void);
+/* ms times emu_time_scale(), for the bound of a wait. The functions below
+ * take their timeouts as given: callers scale them, with the constants
+ * that follow or with emu_ms(). */
+int emu_ms(int ms);
+
 /* How long an immediate reply may take. NOTES: clients expect a reply
- * within 250 ms; this is generous for a loaded 2-core machine, because a
- * slow reply is not what these waits are for: they only stop a hang. */
-#define EMU_REPLY_MS 2000
+ * within 250 ms; this is far more, because a slow reply is not what these
+ * waits are for: they only stop a hang. */
+#define EMU_REPLY_MS emu_ms(5000)
 /* The daemon prints its ready line within this time. */
-#define EMU_READY_MS 5000
+#define EMU_READY_MS emu_ms(10000)
+/* How long a daemon may take to exit after a signal (valgrind checks for
+ * leaks then, which takes seconds). */
+#define EMU_EXIT_MS emu_ms(5000)
 /* A quiet window: how long "nothing arrives" is watched for. */
-#define EMU_QUIET_MS 300
+#define EMU_QUIET_MS emu_ms(300)
+/* Homing from anywhere ends within 4 s of simulated time (NOTES), and a
+ * preposition in these tests within 5 s; as bounds of real-time waits. */
+#define EMU_HOMING_MS emu_ms(4000)
+#define EMU_MOVE_MS   emu_ms(5000)
 
 /* ---- the daemon process ---- */
 
@@ -67,9 +89,9 @@ int emu_start_multi(struct emu *e, const char *exe,
 /* The transport named by argv[2] ("tcp" when absent); exits 2 for an
  * unknown name. */
 const struct emu_transport *emu_transport_arg(int argc, char **argv);
-/* Send sig, wait up to 3 s for the exit and collect the rest of stdout into
- * e->extra. Returns the exit status, 128+N if killed by signal N, or -1 if
- * it did not exit in time (it is then killed). */
+/* Send sig, wait up to EMU_EXIT_MS for the exit and collect the rest of
+ * stdout into e->extra. Returns the exit status, 128+N if killed by signal N,
+ * or -1 if it did not exit in time (it is then killed). */
 int emu_stop_sig(struct emu *e, int sig);
 int emu_stop(struct emu *e); /* SIGTERM */
 /* Value of field name=... of the ready line into buf; NULL if absent. */

@@ -242,7 +242,7 @@ static void exact_reply(struct emu *e, const uint8_t *req, size_t rlen,
         got += (size_t)n;
     }
     /* Anything more would be a second, unexpected packet. */
-    long more = emu_recv_raw(&c, buf + got, sizeof(buf) - got, 100);
+    long more = emu_recv_raw(&c, buf + got, sizeof(buf) - got, emu_ms(100));
     if (more > 0)
         got += (size_t)more;
     CHECK_EQ(got, wlen);
@@ -389,7 +389,8 @@ static void test_signals(const char *exe)
 static void bad_option(const char *exe, const char *const *args)
 {
     char out[512], err[512];
-    int st = emu_run(exe, args, 5000, out, sizeof(out), err, sizeof(err));
+    int st =
+        emu_run(exe, args, emu_ms(5000), out, sizeof(out), err, sizeof(err));
     printf("%s %s: status %d, stderr \"%s\"\n", args[0],
            args[1] ? args[1] : "", st, err);
     CHECK_EQ(st, 2);

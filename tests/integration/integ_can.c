@@ -196,6 +196,7 @@ static void test_ids(const char *exe, const char *iface)
     check_answers_on(exe, iface, NULL, 0x000);
     check_answers_on(exe, iface, "0x123", 0x123);
     check_answers_on(exe, iface, "291", 0x123);
+    check_answers_on(exe, iface, "010", 0x00A); /* decimal, not octal */
     check_answers_on(exe, iface, "0x7FE", 0x7FE);
 }
 
@@ -204,7 +205,8 @@ static void check_open_fails(const char *exe, const char *iface,
 {
     const char *args[] = {"--can", iface, NULL};
     char out[512], err[1024];
-    int st = emu_run(exe, args, 5000, out, sizeof out, err, sizeof err);
+    int st =
+        emu_run(exe, args, emu_ms(5000), out, sizeof out, err, sizeof err);
 
     printf("--can %s: status %d: %s", iface, st, err);
     CHECK_EQ(st, 1);

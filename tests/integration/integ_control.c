@@ -194,7 +194,7 @@ static int home(struct emu_client *c, uint8_t dir)
 {
     int imm;
 
-    return emu_motion(c, WSG_CMD_HOMING, &dir, 1, 5000, &imm);
+    return emu_motion(c, WSG_CMD_HOMING, &dir, 1, EMU_HOMING_MS, &imm);
 }
 
 static int move_to(struct emu_client *c, float width, float speed)
@@ -203,7 +203,7 @@ static int move_to(struct emu_client *c, float width, float speed)
     size_t n = emu_move_payload(p, 0, width, speed);
     int imm;
 
-    return emu_motion(c, WSG_CMD_PREPOSITION, p, n, 10000, &imm);
+    return emu_motion(c, WSG_CMD_PREPOSITION, p, n, emu_ms(10000), &imm);
 }
 
 /* ---- the tests ---- */
@@ -340,15 +340,18 @@ static void test_part_lost(struct emu_client *c, struct ctl *k)
 
     CMD_OK(k, "part 40");
     size_t n = emu_grasp_payload(p, 40.0f, 100.0f);
-    CHECK_EQ(emu_motion(c, WSG_CMD_GRASP, p, n, 5000, &imm), WSG_E_SUCCESS);
+    CHECK_EQ(emu_motion(c, WSG_CMD_GRASP, p, n, EMU_MOVE_MS, &imm),
+             WSG_E_SUCCESS);
     CHECK_EQ(grasp_state_of(c), WSG_GS_HOLDING);
 
     CMD_OK(k, "part none");
     int gs = -1;
-    for (int i = 0; i < 100 && gs != WSG_GS_PART_LOST; i++) {
+    double deadline = emu_now_ms() + EMU_REPLY_MS;
+    for (;;) {
         gs = grasp_state_of(c);
-        if (gs != WSG_GS_PART_LOST)
-            emu_sleep_ms(10);
+        if (gs == WSG_GS_PART_LOST || emu_now_ms() >= deadline)
+            break;
+        emu_sleep_ms(10);
     }
     CHECK_EQ(gs, WSG_GS_PART_LOST);
     REQUIRE(emu_request(c, WSG_CMD_GET_GRASP_STATS, &keep, 1, &f,
@@ -362,7 +365,7 @@ static void test_part_lost(struct emu_client *c, struct ctl *k)
     CHECK_EQ(ctl_json_num(js, "lost_part"), 1);
     CHECK(strstr(js, "\"part_lost\"") != NULL);
     /* The fingers snap on through where the part was; let them settle. */
-    CHECK(emu_wait_flags(c, WSG_SF_MOVING, 0, 5000, NULL) == 0);
+    CHECK(emu_wait_flags(c, WSG_SF_MOVING, 0, EMU_MOVE_MS, NULL) == 0);
 }
 
 static void test_faults(struct emu_client *c, struct ctl *k)

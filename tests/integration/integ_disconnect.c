@@ -15,15 +15,17 @@
  *
  * "No FAST STOP" can only be watched for a while: the window is several
  * times the delay measured for the positive case on the same daemon.
+ * What must happen while a motion runs is checked with simulated time
+ * paused (the control channel) and stepped, so that a slow machine cannot
+ * let the motion end first; the windows of "no FAST STOP" run with time
+ * going on.
  */
 #include "check.h"
 #include "emu.h"
+#include "emu_ctl.h"
 #include "wsg/axis.h"
 
 #include <string.h>
-
-#define HOMING_MS 4000
-#define MOVE_MS   5000
 
 static const char *const ack = "ack";
 
@@ -31,6 +33,8 @@ static const char *const ack = "ack";
  * STOP rule of their end; elsewhere 07h is not available and a client that
  * goes away changes nothing. */
 static const struct emu_transport *tp;
+/* The control channel of the daemon under test: simulated time. */
+static struct ctl k;
 
 static uint32_t flags_of(struct emu_client *c)
 {
@@ -60,21 +64,22 @@ static void announce_and_close(struct emu_client *c)
     emu_close(c);
 }
 
-/* Start a slow closing preposition (over 2 s) on c and wait until it has
- * moved 2 mm, so that a stop on the way is measurable. Returns the width
- * where the fingers were 2 mm ago. */
+/* Pause simulated time, start a slow closing preposition (over 2 s) on c
+ * and step it over 2 mm, so that a stop on the way is measurable. Time
+ * stays paused (the caller resumes it). Returns the width where the fingers
+ * were 2 mm ago. */
 static float start_slow_move(struct emu_client *c, struct emu_client *mon,
                              float to)
 {
     uint8_t p[16];
     size_t n = emu_move_payload(p, 0, to, 20.0f);
     float from = width_of(mon);
+    CMD_OK(&k, "time pause");
     REQUIRE(emu_request(c, WSG_CMD_PREPOSITION, p, n, NULL, EMU_REPLY_MS) ==
             WSG_E_CMD_PENDING);
-    REQUIRE(emu_wait_flags(mon, WSG_SF_MOVING, WSG_SF_MOVING, 1000, NULL) ==
-            0);
-    REQUIRE(emu_wait_float(mon, WSG_CMD_GET_WIDTH, 0.0f, from - 2.0f, 1000,
-                           NULL) == 0);
+    CMD_OK(&k, "time step 300");
+    REQUIRE(flags_of(mon) & WSG_SF_MOVING);
+    REQUIRE(width_of(mon) <= from - 2.0f);
     return from - 2.0f;
 }
 
@@ -99,11 +104,11 @@ static void acknowledge(struct emu_client *m)
     CHECK(flags_of(m) & WSG_SF_FAST_STOP);
     CHECK_EQ(emu_request(m, WSG_CMD_ACK_FAST_STOP, ack, 3, NULL, EMU_REPLY_MS),
              WSG_E_SUCCESS);
-    CHECK(emu_wait_flags(m, WSG_SF_FAST_STOP, 0, 1000, NULL) == 0);
+    CHECK(emu_wait_flags(m, WSG_SF_FAST_STOP, 0, EMU_REPLY_MS, NULL) == 0);
     uint8_t p[16];
     size_t n = emu_move_payload(p, 0, 90.0f, 400.0f);
     int imm = -1;
-    CHECK_EQ(emu_motion(m, WSG_CMD_PREPOSITION, p, n, MOVE_MS, &imm),
+    CHECK_EQ(emu_motion(m, WSG_CMD_PREPOSITION, p, n, EMU_MOVE_MS, &imm),
              WSG_E_SUCCESS);
     CHECK_EQ(imm, WSG_E_CMD_PENDING);
     CHECK_NEAR(width_of(m), 90.0, 0.1);
@@ -121,12 +126,14 @@ static double test_close_without_announce(struct emu *e, struct emu_client *m)
     unsigned m21 = m->seen[WSG_CMD_PREPOSITION];
     t0 = emu_now_ms();
     emu_close(&a);
-    CHECK(fast_stop_within(m, 2000));
+    CHECK(fast_stop_within(m, EMU_REPLY_MS));
     worst = emu_now_ms() - t0;
     printf("close while moving: FAST STOP after %.0f ms\n", worst);
-    CHECK(emu_wait_flags(m, WSG_SF_MOVING, 0, 1000, NULL) == 0);
+    CHECK(emu_wait_flags(m, WSG_SF_MOVING, 0, EMU_REPLY_MS, NULL) == 0);
     float w1 = width_of(m);
     CHECK(w1 > 20.5f && w1 <= from); /* stopped on the way */
+    /* ... and stays there, with time going on. */
+    CMD_OK(&k, "time resume");
     check_motion_denied(m);
     CHECK_NEAR(width_of(m), w1, 0.01);
     /* The closed client's result was not sent to anyone else. */
@@ -140,7 +147,7 @@ static double test_close_without_announce(struct emu *e, struct emu_client *m)
     REQUIRE(emu_send(&a, WSG_CMD_GET_SYSTEM_STATE, NULL, 0) == 0);
     t0 = emu_now_ms();
     emu_abort(&a);
-    CHECK(fast_stop_within(m, 2000));
+    CHECK(fast_stop_within(m, EMU_REPLY_MS));
     double dt = emu_now_ms() - t0;
     printf("reset: FAST STOP after %.0f ms\n", dt);
     worst = dt > worst ? dt : worst;
@@ -151,7 +158,7 @@ static double test_close_without_announce(struct emu *e, struct emu_client *m)
     REQUIRE(emu_open(&a, e, tp) == 0);
     t0 = emu_now_ms();
     emu_close(&a);
-    CHECK(fast_stop_within(m, 2000));
+    CHECK(fast_stop_within(m, EMU_REPLY_MS));
     dt = emu_now_ms() - t0;
     printf("silent connection: FAST STOP after %.0f ms\n", dt);
     worst = dt > worst ? dt : worst;
@@ -204,18 +211,19 @@ static void test_announce(struct emu *e, struct emu_client *m, int window)
     double t0 = emu_now_ms();
     CHECK_EQ(emu_request(&a, WSG_CMD_DISCONNECT, NULL, 0, NULL, EMU_REPLY_MS),
              WSG_E_SUCCESS);
-    /* The move would take over 2 s; stopping takes one step. */
-    CHECK(emu_wait_flags(m, WSG_SF_MOVING, 0, 1000, NULL) == 0);
+    /* The move would take over 2 s; it stops at once. */
+    CHECK(emu_wait_flags(m, WSG_SF_MOVING, 0, EMU_REPLY_MS, NULL) == 0);
     printf("07h while moving: stopped after %.0f ms\n", emu_now_ms() - t0);
     float w = width_of(m);
     CHECK(w > 40.5f && w <= from);
+    CMD_OK(&k, "time resume");
     emu_close(&a);
     CHECK(!fast_stop_within(m, window));
 
     /* Motion is allowed as ever. */
     uint8_t p[16];
     size_t n = emu_move_payload(p, 0, 90.0f, 400.0f);
-    CHECK_EQ(emu_motion(m, WSG_CMD_PREPOSITION, p, n, MOVE_MS, NULL),
+    CHECK_EQ(emu_motion(m, WSG_CMD_PREPOSITION, p, n, EMU_MOVE_MS, NULL),
              WSG_E_SUCCESS);
 }
 
@@ -244,14 +252,14 @@ static void test_no_disconnect_fast_stop(const char *exe, int window)
      * have seen one): 23h sets it, motion is refused, "ack" clears it. */
     CHECK_EQ(emu_request(&m, WSG_CMD_FAST_STOP, NULL, 0, NULL, EMU_REPLY_MS),
              WSG_E_SUCCESS);
-    CHECK(fast_stop_within(&m, 1000));
+    CHECK(fast_stop_within(&m, EMU_REPLY_MS));
     uint8_t dir = 0;
     CHECK_EQ(emu_request(&m, WSG_CMD_HOMING, &dir, 1, NULL, EMU_REPLY_MS),
              WSG_E_ACCESS_DENIED);
     CHECK_EQ(
         emu_request(&m, WSG_CMD_ACK_FAST_STOP, ack, 3, NULL, EMU_REPLY_MS),
         WSG_E_SUCCESS);
-    CHECK(emu_wait_flags(&m, WSG_SF_FAST_STOP, 0, 1000, NULL) == 0);
+    CHECK(emu_wait_flags(&m, WSG_SF_FAST_STOP, 0, EMU_REPLY_MS, NULL) == 0);
     CHECK_EQ(m.bad, 0);
     emu_close(&m); /* no 07h: harmless in this mode */
     CHECK_EQ(emu_stop(&e), 0);
@@ -259,7 +267,8 @@ static void test_no_disconnect_fast_stop(const char *exe, int window)
 
 /* Without connections: 07h is E_NOT_AVAILABLE and refuses nothing after
  * it; a client that goes away in the middle of a motion changes nothing:
- * no FAST STOP, the motion runs to its end. */
+ * no FAST STOP (watched for a window with time going on), the motion runs
+ * to its end. */
 static void test_connectionless(struct emu *e)
 {
     struct emu_client a;
@@ -274,12 +283,18 @@ static void test_connectionless(struct emu *e)
              WSG_E_SUCCESS);
     start_slow_move(&a, &a, 60.0f);
     emu_close(&a);
-    emu_sleep_ms(200);
     REQUIRE(emu_open(&a, e, tp) == 0);
     CHECK(emu_get_flags(&a, &fl) == 0);
     CHECK_EQ(fl & WSG_SF_FAST_STOP, 0);
     CHECK(fl & WSG_SF_MOVING);
-    CHECK(emu_wait_flags(&a, WSG_SF_MOVING, 0, MOVE_MS, &fl) == 0);
+    /* Still moving after a while of time going on (the motion has over
+     * 2 s to go), and no FAST STOP came of it. */
+    CMD_OK(&k, "time step 200");
+    CHECK(emu_get_flags(&a, &fl) == 0);
+    CHECK_EQ(fl & WSG_SF_FAST_STOP, 0);
+    CHECK(fl & WSG_SF_MOVING);
+    CMD_OK(&k, "time resume");
+    CHECK(emu_wait_flags(&a, WSG_SF_MOVING, 0, EMU_MOVE_MS, &fl) == 0);
     CHECK(fl & WSG_SF_TARGET_POS_REACHED);
     CHECK_NEAR(width_of(&a), 60.0, 0.1);
     CHECK_EQ(a.bad, 0);
@@ -292,16 +307,20 @@ int main(int argc, char **argv)
     struct emu e;
     struct emu_client m;
 
+    static const char *const extra[] = {"--control", "127.0.0.1:0", NULL};
+
     tp = emu_transport_arg(argc, argv);
     printf("over %s\n", tp->field);
-    REQUIRE(emu_start_tp(&e, exe, tp, NULL) == 0);
+    REQUIRE(emu_start_tp(&e, exe, tp, extra) == 0);
+    REQUIRE(ctl_open(&k, &e) == 0);
     REQUIRE(emu_open(&m, &e, tp) == 0);
     uint8_t dir = 0;
-    REQUIRE(emu_motion(&m, WSG_CMD_HOMING, &dir, 1, HOMING_MS, NULL) ==
+    REQUIRE(emu_motion(&m, WSG_CMD_HOMING, &dir, 1, EMU_HOMING_MS, NULL) ==
             WSG_E_SUCCESS);
     if (!tp->connection) {
         emu_close(&m);
         test_connectionless(&e);
+        ctl_close(&k);
         CHECK_EQ(emu_stop(&e), 0);
         TEST_EXIT();
     }
@@ -312,11 +331,12 @@ int main(int argc, char **argv)
     int window = (int)(worst * 5);
     if (window < EMU_QUIET_MS * 2)
         window = EMU_QUIET_MS * 2;
-    if (window > 3000)
-        window = 3000;
+    if (window > emu_ms(3000))
+        window = emu_ms(3000);
     test_announce(&e, &m, window);
     CHECK_EQ(m.bad, 0);
     announce_and_close(&m);
+    ctl_close(&k);
     CHECK_EQ(emu_stop(&e), 0);
 
     test_no_disconnect_fast_stop(exe, window);

@@ -48,7 +48,8 @@ static void test_option_errors(const char *exe)
     size_t i;
 
     for (i = 0; i < sizeof bad / sizeof bad[0]; i++) {
-        CHECK_EQ(emu_run(exe, bad[i], 3000, out, sizeof out, err, sizeof err),
+        CHECK_EQ(emu_run(exe, bad[i], emu_ms(3000), out, sizeof out, err,
+                         sizeof err),
                  2);
         if (!strstr(err, why[i]))
             fprintf(stderr, "case %zu: stderr \"%s\"\n", i, err);
@@ -186,7 +187,7 @@ static void test_can(const char *exe)
     }
     CHECK_EQ(emu_request(&c[1], WSG_CMD_HOMING, &dir, 1, NULL, EMU_REPLY_MS),
              WSG_E_CMD_PENDING);
-    CHECK_EQ(emu_recv_id(&c[1], WSG_CMD_HOMING, &f, 10000), 1);
+    CHECK_EQ(emu_recv_id(&c[1], WSG_CMD_HOMING, &f, emu_ms(10000)), 1);
     CHECK_EQ(f.status, WSG_E_SUCCESS);
     CHECK(flags_of(&c[1]) & WSG_SF_REFERENCED);
     CHECK(!(flags_of(&c[0]) & WSG_SF_REFERENCED));
@@ -254,11 +255,13 @@ static int run_local(const char *exe)
     /* UDP: each gripper on its own pair of ports. */
     CHECK(udp_width(udp + 2, udp + 3));
 
-    /* A homing on gripper 2 moves gripper 2 only. */
+    /* A homing on gripper 2 moves gripper 2 only. Simulated time is paused
+     * until the checks of the running homing are done, so that it cannot
+     * end first on a slow machine. */
+    CMD_OK(&k, "time pause");
     CHECK_EQ(emu_request(&c[2], WSG_CMD_HOMING, &dir, 1, NULL, EMU_REPLY_MS),
              WSG_E_CMD_PENDING);
-    /* The motion starts with the next model step. */
-    emu_sleep_ms(20);
+    CMD_OK(&k, "time step 20");
     CHECK(flags_of(&c[2]) & WSG_SF_MOVING);
     CHECK(!(flags_of(&c[0]) & WSG_SF_MOVING));
     CHECK(!(flags_of(&c[1]) & WSG_SF_MOVING));
@@ -269,7 +272,8 @@ static int run_local(const char *exe)
         CHECK_EQ(ctl_json_num(s, "grippers"), N);
         CHECK_EQ(ctl_json_num(s, "active"), 1);
     }
-    CHECK_EQ(emu_recv_id(&c[2], WSG_CMD_HOMING, &f, 10000), 1);
+    CMD_OK(&k, "time resume");
+    CHECK_EQ(emu_recv_id(&c[2], WSG_CMD_HOMING, &f, emu_ms(10000)), 1);
     CHECK_EQ(f.status, WSG_E_SUCCESS);
     CHECK(flags_of(&c[2]) & WSG_SF_REFERENCED);
     CHECK(!(flags_of(&c[0]) & WSG_SF_REFERENCED));
@@ -306,7 +310,7 @@ static int run_local(const char *exe)
         CHECK_EQ(emu_request(&c[2], WSG_CMD_GET_WIDTH, sub, sizeof sub, NULL,
                              EMU_REPLY_MS),
                  WSG_E_SUCCESS);
-        emu_sleep_ms(200);
+        emu_sleep_ms(emu_ms(200));
         CHECK(emu_sync(&c[2], EMU_REPLY_MS) == 0);
         CHECK(c[2].seen[WSG_CMD_GET_WIDTH] >= before + 10);
         CHECK_EQ(ctl_json_num(ctl_cmd(&k, "stats"), "active"), 1);

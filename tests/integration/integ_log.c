@@ -91,7 +91,7 @@ static void test_log(const char *dir)
     snprintf(path, sizeof path, "%s/comm.log", dir);
     REQUIRE(emu_start(&e, exe, args) == 0);
     REQUIRE(emu_open(&c, &e, &emu_tcp) == 0);
-    CHECK_EQ(emu_motion(&c, WSG_CMD_HOMING, &home, 1, 10000, &imm),
+    CHECK_EQ(emu_motion(&c, WSG_CMD_HOMING, &home, 1, emu_ms(10000), &imm),
              WSG_E_SUCCESS);
     CHECK_EQ(imm, WSG_E_CMD_PENDING);
     CHECK_EQ(emu_request(&c, WSG_CMD_LOOP, "abc", 3, NULL, EMU_REPLY_MS),
@@ -110,13 +110,22 @@ static void test_log(const char *dir)
         emu_request(&c, WSG_CMD_GET_SYSTEM_INFO, NULL, 0, NULL, EMU_REPLY_MS),
         WSG_E_SUCCESS);
 
-    /* Flushed after the batch that sent the reply: there while running
-     * (give the daemon a moment past its send). */
-    emu_sleep_ms(100);
-    REQUIRE(slurp(path, text, sizeof text) >= 0);
+    /* Flushed after the batch that sent the reply: there while running.
+     * The daemon may be descheduled between its send and the flush, so the
+     * file is read again until the line is there, within a bound. */
     {
         const char *const p[] = {" out 43h GetOpeningWidth E_SUCCESS width=",
                                  NULL};
+        char line[1024];
+        double deadline = emu_now_ms() + EMU_REPLY_MS;
+
+        for (;;) {
+            REQUIRE(slurp(path, text, sizeof text) >= 0);
+            if (find_line(text, p, line, sizeof line) ||
+                emu_now_ms() >= deadline)
+                break;
+            emu_sleep_ms(10);
+        }
         expect(text, p);
     }
     emu_close(&c);
@@ -180,7 +189,8 @@ static void test_bad_log(void)
     static const char *const args[] = {"--tcp", "127.0.0.1:0", "--log",
                                        "/nonexistent/dir/comm.log", NULL};
     char out[512], err[512];
-    int st = emu_run(exe, args, 5000, out, sizeof out, err, sizeof err);
+    int st =
+        emu_run(exe, args, emu_ms(5000), out, sizeof out, err, sizeof err);
 
     printf("bad log: status %d, stderr \"%s\"\n", st, err);
     CHECK(st != 0);

@@ -30,11 +30,10 @@
 #define NCLIENTS 5
 #define REQUESTS 3000
 #define WINDOW   8
-#define RUN_MS   20000
+#define RUN_MS   emu_ms(20000)
 /* Paced, so the run lasts long enough for several motions (at most one
  * request per client per PACE_MS; the window still bounds what is out). */
-#define PACE_MS   2.0
-#define HOMING_MS 4000
+#define PACE_MS 2.0
 
 struct expect {
     uint8_t id;
@@ -185,8 +184,9 @@ int main(int argc, char **argv)
     }
     printf("%s\n", e.line);
     /* Prepositions need a referenced gripper. */
-    CHECK_EQ(emu_motion(&ks[0].c, WSG_CMD_HOMING, "\0", 1, HOMING_MS, &imm),
-             WSG_E_SUCCESS);
+    CHECK_EQ(
+        emu_motion(&ks[0].c, WSG_CMD_HOMING, "\0", 1, EMU_HOMING_MS, &imm),
+        WSG_E_SUCCESS);
     CHECK_EQ(imm, WSG_E_CMD_PENDING);
 
     t0 = emu_now_ms();

@@ -34,9 +34,6 @@
 #include <termios.h>
 #include <unistd.h>
 
-#define HOMING_MS 4000
-#define MOVE_MS   5000
-
 /* The link path from the ready line. */
 static const char *pty_path(const struct emu *e, char *buf, size_t cap)
 {
@@ -199,8 +196,9 @@ static void test_homing(struct emu *e)
     int immediate = -1;
 
     REQUIRE(emu_open(&c, e, &emu_pty) == 0);
-    CHECK_EQ(emu_motion(&c, WSG_CMD_HOMING, &dir, 1, HOMING_MS, &immediate),
-             WSG_E_SUCCESS);
+    CHECK_EQ(
+        emu_motion(&c, WSG_CMD_HOMING, &dir, 1, EMU_HOMING_MS, &immediate),
+        WSG_E_SUCCESS);
     CHECK_EQ(immediate, WSG_E_CMD_PENDING);
     /* No connection to announce the end of. */
     CHECK_EQ(emu_request(&c, WSG_CMD_DISCONNECT, NULL, 0, NULL, EMU_REPLY_MS),
@@ -247,9 +245,10 @@ static void test_reopen(struct emu *e)
     CHECK_EQ(emu_get_flags(&c, &flags), 0);
     CHECK_EQ(flags & WSG_SF_FAST_STOP, 0);
     CHECK_EQ(
-        emu_wait_float(&c, WSG_CMD_GET_WIDTH, 19.99f, 20.01f, MOVE_MS, &w), 0);
-    CHECK_EQ(emu_wait_flags(&c, WSG_SF_MOVING | WSG_SF_FAST_STOP, 0, MOVE_MS,
-                            &flags),
+        emu_wait_float(&c, WSG_CMD_GET_WIDTH, 19.99f, 20.01f, EMU_MOVE_MS, &w),
+        0);
+    CHECK_EQ(emu_wait_flags(&c, WSG_SF_MOVING | WSG_SF_FAST_STOP, 0,
+                            EMU_MOVE_MS, &flags),
              0);
     emu_close(&c);
 }
@@ -284,7 +283,9 @@ static void test_8n2_byte_reads(struct emu *e)
     r = read(fd, buf, 1);
     dt = emu_now_ms() - t0;
     CHECK_EQ(r, 0);
-    CHECK(dt >= 300 && dt <= 2000);
+    /* The terminal's 0.5 s, give or take the scheduler: the upper bound
+     * only stops a read that does not time out at all. */
+    CHECK(dt >= 300 && dt <= emu_ms(2000));
 
     static const struct {
         uint8_t id;
@@ -301,10 +302,11 @@ static void test_8n2_byte_reads(struct emu *e)
                              (const uint8_t *)reqs[i].payload, plen);
         REQUIRE(n > 0);
         REQUIRE(write(fd, req, n) == (ssize_t)n);
-        /* One byte per read; a few timeouts are allowed, not a hang. */
+        /* One byte per read; timeouts (0.5 s each) are allowed for 2 s, a
+         * bound on the reply's delay, not a hang. */
         got = 0;
         zeros = 0;
-        while (got < want && zeros < 4) {
+        while (got < want && zeros < emu_ms(2000) / 500) {
             r = read(fd, buf + got, 1);
             if (r == 1)
                 got++;
@@ -344,7 +346,7 @@ static void test_stream_reopen(struct emu *e)
         WSG_E_SUCCESS);
     before = c.seen[WSG_CMD_GET_WIDTH];
     got = 0;
-    while (emu_recv_id(&c, WSG_CMD_GET_WIDTH, &f, 600) == 1 &&
+    while (emu_recv_id(&c, WSG_CMD_GET_WIDTH, &f, emu_ms(600)) == 1 &&
            c.seen[WSG_CMD_GET_WIDTH] - before < 20)
         got++;
     printf("stream: %zu packets\n", got);
@@ -359,14 +361,17 @@ static void test_stream_reopen(struct emu *e)
         emu_sleep_ms(150);
 
         REQUIRE(emu_open(&c, e, &emu_pty) == 0);
-        got = read_for(&c, buf, sizeof buf, 400);
+        /* At a large scale the window may fill buf (292 packets of 43h):
+         * read_for stops there, with more than enough to count. */
+        got = read_for(&c, buf, sizeof buf, emu_ms(400));
         printf("after reopen %d: %zu bytes, first %02X %02X %02X\n", round,
                got, got > 0 ? buf[0] : 0, got > 1 ? buf[1] : 0,
                got > 2 ? buf[2] : 0);
         REQUIRE(got >= 3);
         CHECK(buf[0] == 0xAA && buf[1] == 0xAA && buf[2] == 0xAA);
         count = count_packets(buf, got, WSG_CMD_GET_WIDTH);
-        /* About 20 in 400 ms: the stream runs on. */
+        /* About 20 in 400 ms (and more in a scaled window): the stream
+         * runs on. */
         CHECK(count >= 10);
     }
 
@@ -398,7 +403,9 @@ static void test_not_reading(struct emu *e)
         wsg_put_u16(p, (uint16_t)i);
         REQUIRE(emu_send(&c, WSG_CMD_LOOP, p, sizeof p) == 0);
     }
-    emu_sleep_ms(300);
+    /* Time for the daemon to read every request (and to drop what it
+     * cannot queue), before this end reads and makes room. */
+    emu_sleep_ms(emu_ms(300));
     got = read_until_quiet(&c, in, sizeof in, EMU_QUIET_MS);
     while (off < got) {
         long len = packet_at(in + off, got - off);
@@ -475,8 +482,8 @@ static void test_path_taken(const char *exe)
     REQUIRE(fd >= 0);
     REQUIRE(write(fd, "mine", 4) == 4);
     close(fd);
-    status =
-        emu_run(exe, scratch.tp_argv, 5000, out, sizeof out, err, sizeof err);
+    status = emu_run(exe, scratch.tp_argv, emu_ms(5000), out, sizeof out, err,
+                     sizeof err);
     printf("regular file at PATH: status %d, stderr \"%s\"\n", status, err);
     CHECK_EQ(status, 1);
     CHECK(strstr(err, path) != NULL);
@@ -489,7 +496,8 @@ static void test_path_taken(const char *exe)
     args[0] = "--pty";
     args[1] = "/nonexistent-wsgemu-dir/ttyWSG0";
     args[2] = NULL;
-    status = emu_run(exe, args, 5000, out, sizeof out, err, sizeof err);
+    status =
+        emu_run(exe, args, emu_ms(5000), out, sizeof out, err, sizeof err);
     printf("missing directory: status %d, stderr \"%s\"\n", status, err);
     CHECK_EQ(status, 1);
     CHECK(strstr(err, args[1]) != NULL);

@@ -17,7 +17,9 @@
  * - --config FILE gives the same results; an option overrides the file,
  *   wherever --config stands on the command line;
  * - bad values exit 2 naming the valid range; a bad file line exits 2
- *   naming FILE:LINE.
+ *   naming FILE:LINE;
+ * - --can's ID is decimal (leading zeros too: 010 is ten, 08 eight) or 0x
+ *   hex, nothing else (no blanks, signs, octal or other prefixes).
  */
 /* mkstemp, fdopen */
 #define _POSIX_C_SOURCE 200809L
@@ -80,7 +82,7 @@ static void check_group1(const char *const *args)
     CHECK_EQ(EMU_NPARAMS(&f), 6);
     CHECK(memcmp(EMU_PARAMS(&f), "cell 4", 6) == 0);
     /* Homing in the default direction (0) goes the configured way. */
-    CHECK_EQ(emu_motion(&c, WSG_CMD_HOMING, &dir, 1, 10000, &imm),
+    CHECK_EQ(emu_motion(&c, WSG_CMD_HOMING, &dir, 1, emu_ms(10000), &imm),
              WSG_E_SUCCESS);
     CHECK_EQ(imm, WSG_E_CMD_PENDING);
     CHECK_NEAR(get_float(&c, WSG_CMD_GET_WIDTH), 0.0, 0.01);
@@ -105,10 +107,11 @@ static void check_group2(const char *const *args)
         WSG_E_SUCCESS);
     CHECK_EQ(EMU_NPARAMS(&f), 32);
     CHECK_NEAR(wsg_get_f32(EMU_PARAMS(&f)), 68.0, 1e-3);
-    CHECK_EQ(emu_motion(&c, WSG_CMD_HOMING, &dir, 1, 10000, &imm),
+    CHECK_EQ(emu_motion(&c, WSG_CMD_HOMING, &dir, 1, emu_ms(10000), &imm),
              WSG_E_SUCCESS);
     n = emu_grasp_payload(p, 40.0f, 100.0f);
-    CHECK_EQ(emu_motion(&c, WSG_CMD_GRASP, p, n, 10000, &imm), WSG_E_SUCCESS);
+    CHECK_EQ(emu_motion(&c, WSG_CMD_GRASP, p, n, emu_ms(10000), &imm),
+             WSG_E_SUCCESS);
     CHECK_EQ(imm, WSG_E_CMD_PENDING);
     CHECK_EQ(
         emu_request(&c, WSG_CMD_GET_GRASP_STATE, NULL, 0, &f, EMU_REPLY_MS),
@@ -140,9 +143,10 @@ static void check_force_sensor(const char *const *args)
     REQUIRE(emu_open(&c, &e, &emu_tcp) == 0);
     CHECK_EQ(emu_request(&c, WSG_CMD_TARE, NULL, 0, NULL, EMU_REPLY_MS),
              WSG_E_SUCCESS);
-    CHECK_EQ(emu_motion(&c, WSG_CMD_HOMING, &dir, 1, 10000, &imm),
+    CHECK_EQ(emu_motion(&c, WSG_CMD_HOMING, &dir, 1, emu_ms(10000), &imm),
              WSG_E_SUCCESS);
-    CHECK_EQ(emu_motion(&c, WSG_CMD_GRASP, p, n, 10000, &imm), WSG_E_SUCCESS);
+    CHECK_EQ(emu_motion(&c, WSG_CMD_GRASP, p, n, emu_ms(10000), &imm),
+             WSG_E_SUCCESS);
     CHECK_EQ(
         emu_request(&c, WSG_CMD_GET_SYSTEM_STATE, NULL, 0, &f, EMU_REPLY_MS),
         WSG_E_SUCCESS);
@@ -172,7 +176,8 @@ static void test_version(void)
     static const char *const v[] = {"--version", NULL};
     char out[256], err[256];
 
-    CHECK_EQ(emu_run(exe, v, 5000, out, sizeof out, err, sizeof err), 0);
+    CHECK_EQ(emu_run(exe, v, emu_ms(5000), out, sizeof out, err, sizeof err),
+             0);
     CHECK(strncmp(out, "wsgemu ", 7) == 0 && strchr(out, '.') != NULL);
     CHECK(strchr(out, '\n') == out + strlen(out) - 1); /* one line */
 }
@@ -285,7 +290,8 @@ static void test_override(void)
 static void bad(const char *const *args, const char *want)
 {
     char out[512], err[1024];
-    int st = emu_run(exe, args, 5000, out, sizeof out, err, sizeof err);
+    int st =
+        emu_run(exe, args, emu_ms(5000), out, sizeof out, err, sizeof err);
 
     printf("%s %s: status %d, stderr \"%s\"\n", args[0],
            args[1] ? args[1] : "", st, err);
@@ -371,6 +377,46 @@ static void test_bad_files(void)
     bad_file("no-crc = perhaps\n", "1: no-crc");
 }
 
+/* --can IFACE:ID with ID given as id is read as the ID shown. Without a
+ * CAN bus here the value shows in the error of a fleet too large for it:
+ * 1024 grippers from ID take IDs up to ID + 2047, past 0x7FF for every ID
+ * from 2, and the message names ID in hex (it comes before any interface
+ * is opened). */
+static void can_id_read_as(const char *id, const char *shown)
+{
+    char arg[64], want[64];
+    const char *args[] = {"--grippers", "1024", "--can", arg, NULL};
+
+    snprintf(arg, sizeof arg, "nosuchcan9:%s", id);
+    snprintf(want, sizeof want, "CAN IDs %s..", shown);
+    bad(args, want);
+}
+
+static void test_can_id(void)
+{
+    static const char *const refused[] = {
+        "",     " 5",    "5 ",   "+5",
+        "-1",   "0x",    "x10",  "0x 1",
+        "0x1G", "1e2",   "0b1",  "0o7",
+        "2047", "0x7FF", "3000", "0x10000000000000000"};
+    char arg[64];
+    const char *args[] = {"--can", arg, NULL};
+    size_t i;
+
+    can_id_read_as("010", "0x00A");
+    can_id_read_as("08", "0x008");
+    can_id_read_as("0009", "0x009");
+    can_id_read_as("16", "0x010");
+    can_id_read_as("0x10", "0x010");
+    can_id_read_as("0X1f", "0x01F");
+    can_id_read_as("0x00a", "0x00A");
+    can_id_read_as("2046", "0x7FE");
+    for (i = 0; i < sizeof refused / sizeof refused[0]; i++) {
+        snprintf(arg, sizeof arg, "nosuchcan9:%s", refused[i]);
+        bad(args, "11-bit ID of 0..0x7FE");
+    }
+}
+
 int main(int argc, char **argv)
 {
     exe = emu_exe(argc, argv);
@@ -381,5 +427,6 @@ int main(int argc, char **argv)
     test_version();
     test_bad_values();
     test_bad_files();
+    test_can_id();
     TEST_EXIT();
 }

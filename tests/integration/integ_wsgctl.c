@@ -16,6 +16,7 @@
  * - --version; an unknown option is named as unknown, a known one without
  *   its value as needing one; -q info prints bare values; decode tells a
  *   request from a reply;
+ * - numbers are decimal (010 is ten, 08 eight) or 0x hex, nothing else;
  * - the 07h of wsgctl's close aborts another client's running motion
  *   (manual 3.1.2), while --control reads width and state through the
  *   control channel without touching it;
@@ -42,7 +43,8 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
-#define RUN_MS 15000
+/* A bound on one run of wsgctl (its own --timeout is 10 s by default). */
+#define RUN_MS emu_ms(15000)
 
 struct env {
     const char *ctl;
@@ -78,12 +80,21 @@ static unsigned free_port(int type)
 static int ctl(struct env *v, const char *iface, const char *addr, ...)
 {
     const char *args[32];
+    char timeout[32];
     int n = 0, rc;
     va_list ap;
 
     if (iface) {
         args[n++] = iface;
         args[n++] = addr;
+        /* wsgctl's wait for an answer is a bound like the tests' own: as
+         * long again on a machine the time scale declares slower. A later
+         * --timeout of the test's overrides it. */
+        if (emu_time_scale() > 1.0) {
+            snprintf(timeout, sizeof timeout, "%.1f", 10.0 * emu_time_scale());
+            args[n++] = "--timeout";
+            args[n++] = timeout;
+        }
     }
     va_start(ap, addr);
     for (const char *a; (a = va_arg(ap, const char *)) != NULL && n < 31;)
@@ -251,6 +262,20 @@ static void test_raw(struct env *v)
     CHECK(has(v->out, "E_CMD_PENDING") && has(v->out, ": E_SUCCESS"));
     CHECK_EQ(TCP(v, "raw", "0x90"), 1);
     CHECK(has(v->out, "E_CMD_UNKNOWN") && has(v->err, "E_CMD_UNKNOWN"));
+    /* Numbers are decimal or 0x hex: a leading 0 makes no octal. */
+    CHECK_EQ(TCP(v, "raw", "06", "010", "08", "0x0A", "0X0b", "255"), 0);
+    CHECK(has(v->out, "06h Loop: E_SUCCESS\n"));
+    CHECK(has(v->out, "params (5): 0A 08 0A 0B FF\n"));
+    CHECK_EQ(TCP(v, "raw", "010"), 1); /* 0Ah: no command */
+    CHECK(has(v->out, "0Ah") && has(v->err, "E_CMD_UNKNOWN"));
+    /* Nothing else is a number: signs, blanks, a bare 0x, other prefixes,
+     * more than a byte. */
+    static const char *const no[] = {"+1",  " 1",  "1 ",  "0x",   "0x1G",
+                                     "0b1", "0o7", "256", "0x100"};
+    for (size_t i = 0; i < sizeof no / sizeof no[0]; i++) {
+        CHECK_EQ(TCP(v, "raw", "6", no[i]), 2);
+        CHECK(has(v->err, "bad item"));
+    }
 }
 
 static void test_decode(struct env *v)
@@ -297,7 +322,7 @@ static void test_decode(struct env *v)
 
 static void test_watch(struct env *v)
 {
-    char line[64];
+    char line[64], cmd[256];
 
     CHECK_EQ(TCP(v, "watch", "width", "20", "--count", "3"), 0);
     CHECK_EQ(count_lines(v->out), 3);
@@ -310,10 +335,17 @@ static void test_watch(struct env *v)
     CHECK_EQ(TCP(v, "-q", "watch", "grasp", "--count", "2"), 0);
     CHECK_EQ(count_lines(v->out), 2);
     CHECK(has(v->out, " IDLE\n"));
-    /* Until interrupted: SIGINT ends it with status 0. */
-    CHECK_EQ(shell(v, "\"$WSGCTL\" --tcp $TCP watch state 50 & p=$!; "
-                      "sleep 0.6; kill -INT $p; wait $p"),
-             0);
+    /* --count 010 is ten, not octal eight. */
+    CHECK_EQ(TCP(v, "-q", "watch", "width", "10", "--count", "010"), 0);
+    CHECK_EQ(count_lines(v->out), 10);
+    /* Until interrupted: SIGINT ends it with status 0. The lines it
+     * printed before (some 12 in 0.6 s, fewer while wsgctl starts on a
+     * slow machine, hence the scaled wait). */
+    snprintf(cmd, sizeof cmd,
+             "\"$WSGCTL\" --tcp $TCP watch state 50 & p=$!; "
+             "sleep %.1f; kill -INT $p; wait $p",
+             emu_ms(600) / 1000.0);
+    CHECK_EQ(shell(v, cmd), 0);
     CHECK(count_lines(v->out) >= 2);
     CHECK(has(v->out, "SF_REFERENCED"));
 }
@@ -377,7 +409,7 @@ static void test_control_read(struct env *v, struct emu *e)
     CHECK(has(v->err, "reads only"));
     CHECK_EQ(ctl(v, "--control", addr, "stats", "--reset", (char *)NULL), 2);
     /* Still moving: nothing was sent to the gripper. */
-    CHECK_EQ(emu_recv_id(&c, WSG_CMD_PREPOSITION, &f, 100), 0);
+    CHECK_EQ(emu_recv_id(&c, WSG_CMD_PREPOSITION, &f, EMU_QUIET_MS), 0);
     /* A reading over TCP: its close's 07h ends the motion. */
     CHECK_EQ(TCP(v, "width"), 0);
     CHECK_EQ(emu_recv_id(&c, WSG_CMD_PREPOSITION, &f, EMU_REPLY_MS), 1);

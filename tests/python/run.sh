@@ -8,6 +8,8 @@
 # system's pytest.
 #
 # Usage: run.sh WSGEMU PYDIR VENV [PYTEST_ARGS...]
+# Environment: WSG_TEST_TIME_SCALE (a number >= 1) multiplies the tests'
+#   waits, as in the C tests (tests/integration/emu.h).
 # Exit status: pytest's (0 all passed), 1 a setup step failed, 77 no
 #   Debian python3 with venv and pytest here (scripts/deps.sh installs them).
 set -u
@@ -50,9 +52,14 @@ if ! "$venv/bin/python" -m pip install --no-index --quiet "$pydir"; then
     exit 1
 fi
 
+# The fixture's wait for the ready line (10 s by default) is a bound like
+# the C tests' waits: as long again as WSG_TEST_TIME_SCALE says.
+ready_s=$(awk -v k="${WSG_TEST_TIME_SCALE:-1}" 'BEGIN { printf "%g", 10 * k }')
+
 # The tests import the installed package: run from outside the source
 # tree, so python/ itself is not on sys.path. --wsgemu=PATH in one word,
 # or pytest would take the binary for a path to test.
 cd "$venv" || exit 1
 exec "$venv/bin/python" -m pytest -p no:cacheprovider -q -rs \
+    -o "wsgemu_ready_timeout=$ready_s" \
     --rootdir "$pydir/tests" "--wsgemu=$wsgemu" "$@" "$pydir/tests"

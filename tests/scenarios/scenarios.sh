@@ -6,12 +6,17 @@
 # limit hit, FAST STOP, overheating in overdrive.
 #
 # Usage: scenarios.sh WSGEMU WSGCTL
+# Environment: WSG_TEST_TIME_SCALE (a number >= 1, default 1) multiplies
+#   every wait, as in the C tests (tests/integration/emu.h): a wait is a
+#   bound on a hang, not an expectation.
 set -u
 
 WSGEMU=$1
 WSGCTL=$2
 passed=0
 failed=0
+# The bound of every wait for an answer, in seconds.
+wait_s=$(awk -v k="${WSG_TEST_TIME_SCALE:-1}" 'BEGIN { printf "%g", 5 * k }')
 
 fail() {
     echo "FAIL: $*"
@@ -26,7 +31,7 @@ ok() {
 coproc EMU { exec "$WSGEMU" --tcp 127.0.0.1:0 --control 127.0.0.1:0; }
 EMU_PID=$EMU_PID
 trap 'kill "$EMU_PID" 2>/dev/null' EXIT
-read -r -t 5 ready <&"${EMU[0]}" || { echo "no ready line"; exit 1; }
+read -r -t "$wait_s" ready <&"${EMU[0]}" || { echo "no ready line"; exit 1; }
 echo "$ready"
 tcp=$(sed -n 's/.* tcp=\([^ ]*\).*/\1/p' <<<"$ready")
 control=$(sed -n 's/.* control=\([^ ]*\).*/\1/p' <<<"$ready")
@@ -36,11 +41,11 @@ exec 5<>"/dev/tcp/${control%:*}/${control#*:}"
 ctl() {
     local line
     printf '%s\n' "$*" >&5
-    read -r -t 5 line <&5 || { echo "error no answer to: $*"; return 1; }
+    read -r -t "$wait_s" line <&5 || { echo "error no answer to: $*"; return 1; }
     echo "$line"
 }
 
-gripper() { "$WSGCTL" --tcp "$tcp" --timeout 5 "$@"; }
+gripper() { "$WSGCTL" --tcp "$tcp" --timeout "$wait_s" "$@"; }
 
 # Run a wsgctl command while stepping simulated time 10 ms at a time until
 # it ends (at most 60 s of simulated time): deterministic whatever the
