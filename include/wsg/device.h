@@ -142,6 +142,13 @@ void wsg_device_end_streams(struct wsg_device *d);
 int wsg_device_idle(const struct wsg_device *d);
 /* Steps matter: the model is not idle or a session streams. */
 int wsg_device_busy(const struct wsg_device *d);
+/* The device's next deadline, in model steps from its time: 1 while the
+ * model is not idle (it needs every step), else the steps until the first
+ * stream packet is due (a change-only stream counts only with a changed
+ * value), UINT64_MAX when nothing is due. Steps before it change nothing
+ * but the time: a caller may jump them with wsg_device_advance_idle, so a
+ * gripper with one 1 s stream is woken once a second, not every step. */
+uint64_t wsg_device_next(const struct wsg_device *d);
 /* Advance simulated time by n steps while idle (the state cannot change, so
  * the loop may skip stepping through a quiet gap). */
 void wsg_device_advance_idle(struct wsg_device *d, uint64_t nsteps);

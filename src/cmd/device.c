@@ -270,6 +270,55 @@ int wsg_device_busy(const struct wsg_device *d)
     return d->streaming != NULL || !wsg_axis_idle(&d->axis);
 }
 
+/* Steps from now until a stream of s has a packet due, UINT64_MAX when
+ * none will while the model is idle: a change-only stream sends only a
+ * changed value, and an idle model changes none. */
+static uint64_t wsg_device_stream_next(const struct wsg_device *d,
+                                       const struct wsg_session *s)
+{
+    uint64_t now = d->axis.time_us, step = d->axis.cfg.step_us;
+    uint64_t best = UINT64_MAX;
+    unsigned i;
+
+    for (i = 0; i < WSG_STREAM_COUNT; i++) {
+        const struct wsg_stream *st = &s->streams[i];
+        uint8_t params[4];
+        float value;
+        uint64_t k;
+
+        if (!st->on)
+            continue;
+        if (st->change_only) {
+            wsg_stream_value(d, (enum wsg_stream_id)i, params, &value);
+            if (fabsf(value - st->last) < wsg_stream_threshold[i])
+                continue;
+        }
+        /* Polled after a step: the first step that ends at or after the
+         * due time, and never this instant (it has been polled). */
+        k = st->due_us > now ? (st->due_us - now + step - 1) / step : 1;
+        if (k < best)
+            best = k;
+    }
+    return best;
+}
+
+uint64_t wsg_device_next(const struct wsg_device *d)
+{
+    const struct wsg_session *s;
+    uint64_t best;
+
+    if (!wsg_axis_idle(&d->axis))
+        return 1;
+    best = UINT64_MAX;
+    for (s = d->streaming; s && best > 1; s = s->stream_next) {
+        uint64_t k = wsg_device_stream_next(d, s);
+
+        if (k < best)
+            best = k;
+    }
+    return best;
+}
+
 void wsg_device_advance_idle(struct wsg_device *d, uint64_t nsteps)
 {
     d->axis.time_us += nsteps * d->axis.cfg.step_us;

@@ -58,7 +58,8 @@ struct wsg_ctl_client {
 
 struct wsg_ctl {
     struct wsg_watch watch; /* the listening socket */
-    struct wsg_loop *loop;
+    struct wsg_reactor *reactor;
+    struct wsg_sched *sched;
     struct wsg_gripper *cur; /* the line being run acts on this one */
     unsigned nclients;
     unsigned ndead;
@@ -82,7 +83,7 @@ static void client_set_events(struct wsg_ctl_client *c, uint32_t events)
 
     if (c->events == events)
         return;
-    r = wsg_loop_watch_mod(c->ctl->loop, &c->watch, events);
+    r = wsg_reactor_mod(c->ctl->reactor, &c->watch, events);
     if (r < 0) {
         client_kill(c, strerror(-r));
         return;
@@ -246,14 +247,14 @@ static void reply_time(struct wsg_ctl_client *c)
     char t[32];
 
     /* Steps run by hand may have left the gripper idle part way. */
-    wsg_loop_touch(c->ctl->loop, c->ctl->cur);
+    wsg_sched_touch(c->ctl->sched, c->ctl->cur);
     format_time(t, sizeof t, c->ctl->cur->dev.axis.time_us);
     reply(c, "ok %s", t);
 }
 
 static void cmd_time(struct wsg_ctl_client *c, int argc, char **argv)
 {
-    struct wsg_loop *l = c->ctl->loop;
+    struct wsg_sched *l = c->ctl->sched;
     uint32_t step_us = c->ctl->cur->dev.axis.cfg.step_us;
     double v;
     int r;
@@ -263,7 +264,7 @@ static void cmd_time(struct wsg_ctl_client *c, int argc, char **argv)
         return;
     }
     if (strcmp(argv[1], "pause") == 0 && argc == 2) {
-        r = wsg_loop_pause(l);
+        r = wsg_sched_pause(l);
         if (r < 0)
             reply(c, "error time pause: %s", strerror(-r));
         else
@@ -271,7 +272,7 @@ static void cmd_time(struct wsg_ctl_client *c, int argc, char **argv)
         return;
     }
     if (strcmp(argv[1], "resume") == 0 && argc == 2) {
-        r = wsg_loop_resume(l);
+        r = wsg_sched_resume(l);
         if (r < 0)
             reply(c, "error time resume: %s", strerror(-r));
         else
@@ -283,10 +284,10 @@ static void cmd_time(struct wsg_ctl_client *c, int argc, char **argv)
             reply(c, "error time scale: '%s' is not a number", argv[2]);
             return;
         }
-        r = wsg_loop_set_scale(l, v);
+        r = wsg_sched_set_scale(l, v);
         if (r == -EINVAL)
             reply(c, "error time scale: X must be in %g..%g",
-                  WSG_LOOP_SCALE_MIN, WSG_LOOP_SCALE_MAX);
+                  WSG_SCHED_SCALE_MIN, WSG_SCHED_SCALE_MAX);
         else if (r < 0)
             reply(c, "error time scale: %s", strerror(-r));
         else
@@ -314,7 +315,7 @@ static void cmd_time(struct wsg_ctl_client *c, int argc, char **argv)
                   argv[2], (unsigned)step_us);
             return;
         }
-        r = wsg_loop_step(l, (uint64_t)(us + 0.5) / step_us);
+        r = wsg_sched_step(l, (uint64_t)(us + 0.5) / step_us);
         if (r == -EBUSY)
             reply(c, "error time step: not paused (time pause first)");
         else if (r < 0)
@@ -374,7 +375,7 @@ static void cmd_state(struct wsg_ctl_client *c)
     const struct wsg_gripper *g = c->ctl->cur;
     const struct wsg_device *d = &g->dev;
     const struct wsg_axis *ax = &d->axis;
-    const struct wsg_loop *l = c->ctl->loop;
+    const struct wsg_sched *l = c->ctl->sched;
     uint32_t flags =
         wsg_axis_flags(ax) | (d->cmd_failure ? WSG_SF_CMD_FAILURE : 0u);
     unsigned gs = (unsigned)ax->grasp_state;
@@ -433,7 +434,7 @@ static void cmd_reset(struct wsg_ctl_client *c)
 
 static void cmd_gripper(struct wsg_ctl_client *c, int argc, char **argv)
 {
-    const struct wsg_loop *l = c->ctl->loop;
+    const struct wsg_sched *l = c->ctl->sched;
     double v;
 
     if (argc > 2) {
@@ -455,17 +456,20 @@ static void cmd_gripper(struct wsg_ctl_client *c, int argc, char **argv)
 /* The loop's figures, for benchmarks and to see a fleet's state. */
 static void cmd_stats(struct wsg_ctl_client *c)
 {
-    const struct wsg_loop *l = c->ctl->loop;
+    const struct wsg_sched *l = c->ctl->sched;
 
     reply(c,
           "ok {\"grippers\":%lu,\"active\":%lu,\"steps\":%llu,"
           "\"gripper_steps\":%llu,\"overruns\":%llu,\"idle_steps\":%llu,"
-          "\"late_max_us\":%.1f,\"step_us\":%.0f,\"scale\":%g,"
-          "\"paused\":%s}",
-          (unsigned long)l->ngrippers, (unsigned long)l->nactive,
-          (unsigned long long)l->steps, (unsigned long long)l->dev_steps,
-          (unsigned long long)l->overruns, (unsigned long long)l->idle_steps,
-          (double)l->late_max_ns / 1000.0, (double)l->step_ns / 1000.0,
+          "\"wakes\":%llu,\"late_max_us\":%.1f,\"step_us\":%.0f,"
+          "\"scale\":%g,\"paused\":%s}",
+          (unsigned long)l->ngrippers, (unsigned long)wsg_sched_active(l),
+          (unsigned long long)l->stats.steps,
+          (unsigned long long)l->stats.dev_steps,
+          (unsigned long long)l->stats.overruns,
+          (unsigned long long)l->stats.idle_steps,
+          (unsigned long long)l->stats.wakes,
+          (double)l->stats.late_max_ns / 1000.0, (double)l->step_ns / 1000.0,
           l->scale, l->paused ? "true" : "false");
 }
 
@@ -502,11 +506,11 @@ static void run_line(struct wsg_ctl_client *c, char *line)
      * command reads or changes it; afterwards it is stepped if it now has
      * work. Settled like a gripper command: a fault's consequences (FAST
      * STOP, a motion aborted) are there when "ok" is. */
-    c->ctl->cur = &c->ctl->loop->grippers[c->gripper];
-    wsg_loop_touch(c->ctl->loop, c->ctl->cur);
+    c->ctl->cur = &c->ctl->sched->grippers[c->gripper];
+    wsg_sched_touch(c->ctl->sched, c->ctl->cur);
     run_command(c, argc, argv);
     wsg_axis_settle(&c->ctl->cur->dev.axis);
-    wsg_loop_check(c->ctl->loop, c->ctl->cur);
+    wsg_sched_check(c->ctl->sched, c->ctl->cur);
 }
 
 static void run_command(struct wsg_ctl_client *c, int argc, char **argv)
@@ -590,7 +594,7 @@ static void client_read(struct wsg_ctl_client *c)
 
 static void client_free(struct wsg_ctl *ctl, struct wsg_ctl_client *c)
 {
-    wsg_loop_watch_del(ctl->loop, &c->watch);
+    wsg_reactor_del(ctl->reactor, &c->watch);
     close(c->watch.fd);
     ctl->clients[c->slot] = NULL;
     ctl->nclients--;
@@ -599,14 +603,18 @@ static void client_free(struct wsg_ctl *ctl, struct wsg_ctl_client *c)
     free(c);
 }
 
-static void on_listen(struct wsg_ctl *ctl)
+static void client_event(struct wsg_watch *w, uint32_t events);
+
+static void on_listen(struct wsg_watch *w, uint32_t events)
 {
+    struct wsg_ctl *ctl = w->ctx;
     static const char full[] = "error too many control clients\n";
     struct wsg_ctl_client *c;
     unsigned slot;
     int fd;
     int r;
 
+    (void)events;
     fd = accept4(ctl->watch.fd, NULL, NULL, SOCK_NONBLOCK | SOCK_CLOEXEC);
     if (fd < 0)
         return; /* EAGAIN, or a pending connection that failed */
@@ -627,12 +635,11 @@ static void on_listen(struct wsg_ctl *ctl)
     }
     memset(c, 0, offsetof(struct wsg_ctl_client, out));
     wsg_outq_init(&c->out, 1);
-    c->watch.owner = ctl->watch.owner;
-    c->watch.fd = fd;
+    wsg_watch_init(&c->watch, fd, client_event, c);
     c->ctl = ctl;
     c->slot = slot;
     c->events = EPOLLIN | EPOLLRDHUP;
-    r = wsg_loop_watch_add(ctl->loop, &c->watch, c->events);
+    r = wsg_reactor_add(ctl->reactor, &c->watch, c->events);
     if (r < 0) {
         fprintf(stderr, "wsgemu: control: refused a client: %s\n",
                 strerror(-r));
@@ -644,17 +651,10 @@ static void on_listen(struct wsg_ctl *ctl)
     ctl->nclients++;
 }
 
-static void ctl_handle(struct wsg_transport *t, struct wsg_watch *w,
-                       uint32_t events)
+static void client_event(struct wsg_watch *w, uint32_t events)
 {
-    struct wsg_ctl *ctl = t->state;
-    struct wsg_ctl_client *c;
+    struct wsg_ctl_client *c = w->ctx;
 
-    if (w == &ctl->watch) {
-        on_listen(ctl);
-        return;
-    }
-    c = (struct wsg_ctl_client *)w;
     if (c->dead)
         return;
     if (events & EPOLLOUT)
@@ -665,9 +665,10 @@ static void ctl_handle(struct wsg_transport *t, struct wsg_watch *w,
         client_read(c);
 }
 
-static void ctl_settle(struct wsg_transport *t)
+/* After each batch: free the clients that ended during it. */
+static void ctl_reap(void *ctx)
 {
-    struct wsg_ctl *ctl = t->state;
+    struct wsg_ctl *ctl = ctx;
     unsigned i;
 
     for (i = 0; i < WSG_CTL_CLIENTS_MAX && ctl->ndead > 0; i++)
@@ -675,73 +676,69 @@ static void ctl_settle(struct wsg_transport *t)
             client_free(ctl, ctl->clients[i]);
 }
 
-static int ctl_describe(const struct wsg_transport *t, char *buf, size_t len)
+int wsg_control_describe(const struct wsg_ctl *ctl, char *buf, size_t len)
 {
-    const struct wsg_ctl *ctl = t->state;
     int r = snprintf(buf, len, "%s", ctl->local);
 
     return r < 0 || (size_t)r >= len ? -ENOSPC : 0;
 }
 
-static void ctl_close(struct wsg_transport *t)
+void wsg_control_close(struct wsg_ctl *ctl)
 {
-    struct wsg_ctl *ctl = t->state;
     unsigned i;
 
     if (!ctl)
         return;
+    wsg_reactor_forget(ctl->reactor, ctl_reap, ctl);
     for (i = 0; i < WSG_CTL_CLIENTS_MAX; i++)
         if (ctl->clients[i])
             client_free(ctl, ctl->clients[i]);
     if (ctl->watch.fd >= 0) {
-        wsg_loop_watch_del(ctl->loop, &ctl->watch);
+        wsg_reactor_del(ctl->reactor, &ctl->watch);
         close(ctl->watch.fd);
     }
     free(ctl);
-    t->state = NULL;
 }
 
-static int ctl_open(struct wsg_transport *t,
-                    const struct wsg_transport_env *env, char *err,
-                    size_t errlen)
+int wsg_control_open(struct wsg_ctl **out, struct wsg_reactor *reactor,
+                     struct wsg_sched *sched, const struct wsg_endpoint *ep,
+                     char *err, size_t errlen)
 {
     struct wsg_ctl *ctl = calloc(1, sizeof *ctl);
     int r;
 
+    *out = NULL;
     if (!ctl) {
         snprintf(err, errlen, "cannot listen on control: %s",
                  strerror(ENOMEM));
         return -ENOMEM;
     }
-    ctl->loop = env->loop;
-    ctl->watch.owner = t;
-    r = wsg_transport_listen_tcp(&env->opt->control, (int)WSG_CTL_CLIENTS_MAX,
-                                 "control", ctl->local, sizeof ctl->local, err,
-                                 errlen);
+    ctl->reactor = reactor;
+    ctl->sched = sched;
+    r = wsg_transport_listen_tcp(ep, (int)WSG_CTL_CLIENTS_MAX, "control",
+                                 ctl->local, sizeof ctl->local, err, errlen);
     if (r < 0)
         goto fail;
-    ctl->watch.fd = r;
-    r = wsg_loop_watch_add(ctl->loop, &ctl->watch, EPOLLIN);
+    wsg_watch_init(&ctl->watch, r, on_listen, ctl);
+    r = wsg_reactor_add(reactor, &ctl->watch, EPOLLIN);
     if (r < 0) {
         snprintf(err, errlen, "cannot listen on control %s: epoll: %s",
                  ctl->local, strerror(-r));
-        close(ctl->watch.fd);
-        goto fail;
+        goto fail_fd;
     }
-    t->state = ctl;
+    r = wsg_reactor_after(reactor, ctl_reap, ctl);
+    if (r < 0) {
+        snprintf(err, errlen, "cannot serve control %s: %s", ctl->local,
+                 strerror(-r));
+        wsg_reactor_del(reactor, &ctl->watch);
+        goto fail_fd;
+    }
+    *out = ctl;
     return 0;
 
+fail_fd:
+    close(ctl->watch.fd);
 fail:
     free(ctl);
-    t->state = NULL;
     return r;
 }
-
-const struct wsg_transport_ops wsg_control_ops = {
-    .name = "control",
-    .open = ctl_open,
-    .close = ctl_close,
-    .handle = ctl_handle,
-    .describe = ctl_describe,
-    .settle = ctl_settle,
-};

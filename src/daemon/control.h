@@ -3,8 +3,9 @@
  * port of its own, for tests and people with nc, that changes the world
  * around the gripper (a part, an obstacle, faults), controls simulated time
  * and reports the model's state. It has no sessions and speaks no gripper
- * protocol; it is built as a transport only so that the loop serves its
- * descriptors and the ready line names it (opened last: "control=...").
+ * protocol: it is a service of the daemon on the reactor, acting on the
+ * grippers through the scheduler (which brings a gripper's time up to date
+ * before a command and reschedules it after).
  *
  * One command per line, each answered with one line: "ok ..." or
  * "error <reason>". The commands are listed in README.md; control.c parses
@@ -13,6 +14,10 @@
 #ifndef WSG_DAEMON_CONTROL_H
 #define WSG_DAEMON_CONTROL_H
 
+#include <stddef.h>
+
+#include "reactor.h"
+#include "sched.h"
 #include "transport.h"
 
 /* Longest command line, without its newline; longer ones are answered with
@@ -20,5 +25,17 @@
 #define WSG_CTL_LINE_MAX 256u
 /* Control clients at once; one more is told so and closed. */
 #define WSG_CTL_CLIENTS_MAX 16u
+
+struct wsg_ctl;
+
+/* Listen on ep and serve. On failure put a one-line reason in err and
+ * return -errno (*out NULL). */
+int wsg_control_open(struct wsg_ctl **out, struct wsg_reactor *reactor,
+                     struct wsg_sched *sched, const struct wsg_endpoint *ep,
+                     char *err, size_t errlen);
+/* The address it listens on, for the ready line. */
+int wsg_control_describe(const struct wsg_ctl *ctl, char *buf, size_t len);
+/* Close every client and the socket; safe on NULL. */
+void wsg_control_close(struct wsg_ctl *ctl);
 
 #endif

@@ -1,19 +1,27 @@
 /*
- * Assembly of the daemon: each gripper's device is configured from the
- * options, its lookup routes final results by tag to the gripper's own
- * transport that owns the session, and its transports are opened in a
- * fixed order after the loop (whose signal mask must be in place before
- * anything can be announced). A fleet opens the same interfaces for every
+ * Assembly of the daemon: the signal mask first (nothing may be announced
+ * before SIGTERM is caught), the reactor and its services (the scheduler,
+ * the file watches, a signalfd); then each gripper's device configured
+ * from the options, its lookup routing final results by tag to the
+ * gripper's own transport that owns the session, and its transports
+ * opened in a fixed order, each from its own config struct, with the
+ * scheduler as their host. A fleet opens the same interfaces for every
  * gripper, each with its own addresses (wsg_options_gripper), and the
  * control channel once for the process, last.
  */
+#define _GNU_SOURCE /* signalfd */
+
 #include "daemon.h"
 
 #include <errno.h>
+#include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/epoll.h>
 #include <sys/resource.h>
+#include <sys/signalfd.h>
+#include <unistd.h>
 
 /* Descriptors a gripper can hold with every interface open and no client:
  * TCP and UDP sockets, the pty's master and inotify, a CAN socket. */
@@ -34,22 +42,62 @@ static void daemon_log_flush(void *ctx)
     wsg_log_flush(ctx);
 }
 
-static int open_transport(struct wsg_transport *t, size_t index,
-                          const struct wsg_transport_ops *ops,
-                          const struct wsg_transport_env *env)
+/* The scheduler as the host of a gripper's transports. */
+static void gripper_enter(void *ctx)
 {
+    struct wsg_gripper *g = ctx;
+
+    wsg_sched_touch(g->sched, g);
+}
+
+static void gripper_leave(void *ctx)
+{
+    struct wsg_gripper *g = ctx;
+
+    wsg_sched_check(g->sched, g);
+}
+
+static void gripper_defer(void *ctx)
+{
+    struct wsg_gripper *g = ctx;
+
+    wsg_sched_defer(g->sched, g);
+}
+
+static void on_signal(struct wsg_watch *w, uint32_t events)
+{
+    struct wsg_daemon *d = w->ctx;
+    struct signalfd_siginfo si;
+
+    (void)events;
+    while (read(w->fd, &si, sizeof si) == (ssize_t)sizeof si)
+        if (si.ssi_signo == SIGINT || si.ssi_signo == SIGTERM)
+            wsg_reactor_stop(&d->reactor);
+}
+
+static int open_transport(struct wsg_gripper *g,
+                          const struct wsg_transport_ops *ops,
+                          const struct wsg_transport_env *env, const void *cfg)
+{
+    struct wsg_transport *t = &g->transports[g->ntransports];
     char err[512];
     int r;
 
     memset(t, 0, sizeof *t);
     t->ops = ops;
-    t->tag_base = (uint32_t)(index + 1) << WSG_TAG_TRANSPORT_SHIFT;
-    t->gripper = env->gripper;
+    t->tag_base = (uint32_t)(g->ntransports + 1) << WSG_TAG_TRANSPORT_SHIFT;
+    t->host.enter = gripper_enter;
+    t->host.leave = gripper_leave;
+    t->host.defer = gripper_defer;
+    t->host.ctx = g;
     err[0] = '\0';
-    r = ops->open(t, env, err, sizeof err);
-    if (r < 0)
+    r = ops->open(t, env, cfg, err, sizeof err);
+    if (r < 0) {
         fprintf(stderr, "wsgemu: %s\n", err[0] ? err : strerror(-r));
-    return r;
+        return r;
+    }
+    g->ntransports++;
+    return 0;
 }
 
 /* A fleet needs a descriptor or more per interface and gripper: take what
@@ -82,7 +130,6 @@ static int open_gripper(struct wsg_daemon *d, struct wsg_gripper *g,
     struct wsg_options o;
     struct wsg_transport_env env;
     char path[WSG_OPTIONS_PATH_MAX];
-    size_t i;
     int r;
 
     wsg_options_gripper(&d->opt, index, &o, path, sizeof path);
@@ -111,31 +158,85 @@ static int open_gripper(struct wsg_daemon *d, struct wsg_gripper *g,
         return r;
     }
 
-    env.loop = &d->loop;
+    memset(&env, 0, sizeof env);
+    env.reactor = &d->reactor;
+    env.fswatch = &d->fswatch;
     env.dev = &g->dev;
-    env.opt = &o;
-    env.gripper = g;
-    {
-        /* In this order on the ready line. */
-        const struct {
-            int on;
-            const struct wsg_transport_ops *ops;
-        } want[] = {{o.tcp_enabled, &wsg_tcp_ops},
-                    {o.udp_enabled, &wsg_udp_ops},
-                    {o.pty_path != NULL, &wsg_pty_ops},
-                    {o.can_iface != NULL, &wsg_can_ops}};
+    env.rx = d->rx;
+    env.rxlen = WSG_DAEMON_RX_MAX;
+    /* In this order on the ready line. */
+    if (o.tcp_enabled) {
+        struct wsg_tcp_config c = {o.tcp, o.max_clients, o.check_crc};
 
-        for (i = 0; i < sizeof want / sizeof want[0]; i++) {
-            if (!want[i].on)
-                continue;
-            r = open_transport(&g->transports[g->ntransports], g->ntransports,
-                               want[i].ops, &env);
-            if (r < 0)
-                return r;
-            g->ntransports++;
-        }
+        r = open_transport(g, &wsg_tcp_ops, &env, &c);
+        if (r < 0)
+            return r;
+    }
+    if (o.udp_enabled) {
+        struct wsg_udp_config c = {o.udp, o.udp_remote_port, o.check_crc};
+
+        r = open_transport(g, &wsg_udp_ops, &env, &c);
+        if (r < 0)
+            return r;
+    }
+    if (o.pty_path) {
+        struct wsg_pty_config c = {o.pty_path, o.check_crc};
+
+        r = open_transport(g, &wsg_pty_ops, &env, &c);
+        if (r < 0)
+            return r;
+    }
+    if (o.can_iface) {
+        struct wsg_can_config c = {o.can_iface, o.can_id, o.check_crc};
+
+        r = open_transport(g, &wsg_can_ops, &env, &c);
+        if (r < 0)
+            return r;
     }
     return 0;
+}
+
+/* Signals come through a descriptor: blocked before anything else exists,
+ * so a SIGTERM sent right after the ready line is queued for it, never
+ * the default action. They stay blocked after close: a second SIGTERM
+ * must not turn a clean exit into death by signal. */
+static int open_signals(struct wsg_daemon *d)
+{
+    sigset_t mask;
+    int fd;
+
+    sigemptyset(&mask);
+    sigaddset(&mask, SIGINT);
+    sigaddset(&mask, SIGTERM);
+    if (sigprocmask(SIG_BLOCK, &mask, NULL) < 0)
+        return -errno;
+    fd = signalfd(-1, &mask, SFD_NONBLOCK | SFD_CLOEXEC);
+    if (fd < 0)
+        return -errno;
+    wsg_watch_init(&d->signal, fd, on_signal, d);
+    return wsg_reactor_add(&d->reactor, &d->signal, EPOLLIN);
+}
+
+/* The reactor and the process's services on it. */
+static int open_services(struct wsg_daemon *d)
+{
+    int r;
+
+    r = wsg_reactor_init(&d->reactor);
+    if (r < 0)
+        return r;
+    r = open_signals(d);
+    if (r < 0)
+        return r;
+    wsg_fswatch_init(&d->fswatch, &d->reactor);
+    /* The scheduler's hook first: peers are reaped and grippers
+     * rescheduled before the log is flushed. */
+    r = wsg_sched_init(&d->sched, &d->reactor, d->opt.step_us);
+    if (r < 0)
+        return r;
+    if (d->log.f)
+        r = wsg_reactor_after(&d->reactor, daemon_log_flush, &d->log);
+    return r;
 }
 
 int wsg_daemon_open(struct wsg_daemon *d)
@@ -144,7 +245,11 @@ int wsg_daemon_open(struct wsg_daemon *d)
     int r;
 
     d->ngrippers = 0;
-    d->nshared = 0;
+    d->control = NULL;
+    d->signal.fd = -1;
+    d->sched.timer.fd = -1;
+    d->fswatch.watch.fd = -1;
+    d->reactor.epfd = -1;
     if (d->opt.grippers > 1) {
         r = raise_fd_limit(&d->opt);
         if (r < 0)
@@ -165,42 +270,46 @@ int wsg_daemon_open(struct wsg_daemon *d)
             return r;
         }
     }
-    r = wsg_loop_init(&d->loop, d->opt.step_us);
+    d->rx = malloc(WSG_DAEMON_RX_MAX);
+    if (!d->rx) {
+        fprintf(stderr, "wsgemu: no memory for the receive buffer\n");
+        return -ENOMEM;
+    }
+    r = open_services(d);
     if (r < 0) {
         fprintf(stderr, "wsgemu: cannot set up the event loop: %s\n",
                 strerror(-r));
         return r;
     }
-    r = wsg_loop_set_scale(&d->loop, d->opt.time_scale);
+    r = wsg_sched_set_scale(&d->sched, d->opt.time_scale);
     if (r < 0) {
         fprintf(stderr, "wsgemu: time scale %g: must be in %g..%g\n",
-                d->opt.time_scale, WSG_LOOP_SCALE_MIN, WSG_LOOP_SCALE_MAX);
+                d->opt.time_scale, WSG_SCHED_SCALE_MIN, WSG_SCHED_SCALE_MAX);
         return r;
     }
-    if (d->log.f) {
-        d->loop.settled = daemon_log_flush;
-        d->loop.settled_ctx = &d->log;
+    r = wsg_sched_set_grippers(&d->sched, d->grippers, d->opt.grippers);
+    if (r < 0) {
+        fprintf(stderr, "wsgemu: no memory for %u grippers\n",
+                d->opt.grippers);
+        return r;
     }
     for (i = 0; i < d->opt.grippers; i++) {
         /* Counted before it is complete: close undoes what it opened. */
         d->ngrippers = i + 1;
-        wsg_loop_set_grippers(&d->loop, d->grippers, d->ngrippers);
         r = open_gripper(d, &d->grippers[i], i);
         if (r < 0)
             return r;
     }
     if (d->opt.control_enabled) {
-        struct wsg_transport_env env;
+        char err[512];
 
-        memset(&env, 0, sizeof env);
-        env.loop = &d->loop;
-        env.opt = &d->opt;
         /* Last: the ready line ends with control=. */
-        r = open_transport(&d->shared[0], 0, &wsg_control_ops, &env);
-        if (r < 0)
+        r = wsg_control_open(&d->control, &d->reactor, &d->sched,
+                             &d->opt.control, err, sizeof err);
+        if (r < 0) {
+            fprintf(stderr, "wsgemu: %s\n", err);
             return r;
-        d->nshared = 1;
-        wsg_loop_set_shared(&d->loop, d->shared, d->nshared);
+        }
     }
     return 0;
 }
@@ -227,23 +336,21 @@ static int put(char **buf, size_t *cap, size_t *used, const char *s)
     return 0;
 }
 
-static int put_field(char **buf, size_t *cap, size_t *used,
-                     const struct wsg_transport *t, int first)
+/* " name=value", or ",value" after the first gripper's. */
+static int put_field(char **buf, size_t *cap, size_t *used, const char *name,
+                     const char *v, int first)
 {
-    char v[WSG_OPTIONS_PATH_MAX + 32];
     int r;
 
     if (first) {
         r = put(buf, cap, used, " ");
         if (r == 0)
-            r = put(buf, cap, used, t->ops->name);
+            r = put(buf, cap, used, name);
         if (r == 0)
             r = put(buf, cap, used, "=");
     } else {
         r = put(buf, cap, used, ",");
     }
-    if (r == 0)
-        r = t->ops->describe(t, v, sizeof v);
     return r < 0 ? r : put(buf, cap, used, v);
 }
 
@@ -251,7 +358,7 @@ static int put_field(char **buf, size_t *cap, size_t *used,
  * every gripper's value, comma-separated, in gripper order. */
 int wsg_daemon_announce(struct wsg_daemon *d)
 {
-    char *line = NULL;
+    char *line = NULL, v[WSG_OPTIONS_PATH_MAX + 32];
     size_t cap = 0, used = 0;
     size_t j, i;
     int r;
@@ -259,11 +366,18 @@ int wsg_daemon_announce(struct wsg_daemon *d)
     r = put(&line, &cap, &used, "ready");
     for (j = 0; r == 0 && d->ngrippers > 0 && j < d->grippers[0].ntransports;
          j++)
-        for (i = 0; r == 0 && i < d->ngrippers; i++)
-            r = put_field(&line, &cap, &used, &d->grippers[i].transports[j],
-                          i == 0);
-    for (j = 0; r == 0 && j < d->nshared; j++)
-        r = put_field(&line, &cap, &used, &d->shared[j], 1);
+        for (i = 0; r == 0 && i < d->ngrippers; i++) {
+            const struct wsg_transport *t = &d->grippers[i].transports[j];
+
+            r = t->ops->describe(t, v, sizeof v);
+            if (r == 0)
+                r = put_field(&line, &cap, &used, t->ops->name, v, i == 0);
+        }
+    if (r == 0 && d->control) {
+        r = wsg_control_describe(d->control, v, sizeof v);
+        if (r == 0)
+            r = put_field(&line, &cap, &used, "control", v, 1);
+    }
     if (r < 0) {
         fprintf(stderr, "wsgemu: ready line: %s\n", strerror(-r));
         free(line);
@@ -278,7 +392,7 @@ int wsg_daemon_announce(struct wsg_daemon *d)
 
 int wsg_daemon_run(struct wsg_daemon *d)
 {
-    int r = wsg_loop_run(&d->loop);
+    int r = wsg_reactor_run(&d->reactor);
 
     if (r < 0)
         fprintf(stderr, "wsgemu: event loop: %s\n", strerror(-r));
@@ -287,7 +401,7 @@ int wsg_daemon_run(struct wsg_daemon *d)
 
 static void close_gripper(struct wsg_gripper *g)
 {
-    /* In reverse, and before the loop's epoll descriptor goes. */
+    /* In reverse, and before the reactor's epoll descriptor goes. */
     while (g->ntransports > 0) {
         struct wsg_transport *t = &g->transports[--g->ntransports];
 
@@ -299,15 +413,18 @@ static void close_gripper(struct wsg_gripper *g)
 
 void wsg_daemon_close(struct wsg_daemon *d)
 {
-    while (d->nshared > 0) {
-        struct wsg_transport *t = &d->shared[--d->nshared];
-
-        wsg_loop_set_shared(&d->loop, d->shared, d->nshared);
-        t->ops->close(t);
-    }
+    wsg_control_close(d->control);
+    d->control = NULL;
     while (d->ngrippers > 0)
         close_gripper(&d->grippers[--d->ngrippers]);
-    wsg_loop_fini(&d->loop);
+    wsg_sched_fini(&d->sched);
+    wsg_fswatch_fini(&d->fswatch);
+    if (d->signal.fd >= 0)
+        close(d->signal.fd);
+    d->signal.fd = -1;
+    wsg_reactor_fini(&d->reactor);
+    free(d->rx);
+    d->rx = NULL;
     /* Last: closing peers may still log their final packets. */
     if (d->grippers && d->log.f) {
         size_t i;

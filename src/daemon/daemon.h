@@ -1,34 +1,45 @@
 /*
  * The daemon's whole context in one struct, built in main: options, the
- * emulated grippers (one, or a fleet with --grippers), the loop, the
- * process's own transports (the control channel) and the communication
- * log. Nothing of it is global, so the parts can be driven and torn down in
- * any test harness.
+ * emulated grippers (one, or a fleet with --grippers), the reactor and the
+ * services on it (the scheduler, the file watches, the signals, the
+ * control channel) and the communication log. Nothing of it is global, so the
+ * parts can be driven and torn down in any test harness.
  */
 #ifndef WSG_DAEMON_H
 #define WSG_DAEMON_H
 
 #include <stddef.h>
 
+#include <stdint.h>
+
+#include "control.h"
+#include "fswatch.h"
 #include "gripper.h"
 #include "log.h"
-#include "loop.h"
 #include "options.h"
+#include "reactor.h"
+#include "sched.h"
 #include "transport.h"
+
+/* The shared receive buffer: the largest datagram. */
+#define WSG_DAEMON_RX_MAX 65536u
 
 struct wsg_daemon {
     struct wsg_options opt;
     struct wsg_gripper *grippers; /* opt.grippers of them */
     size_t ngrippers;             /* set up so far */
-    struct wsg_loop loop;
-    struct wsg_transport shared[1]; /* the control channel */
-    size_t nshared;
+    struct wsg_reactor reactor;
+    struct wsg_sched sched;
+    struct wsg_fswatch fswatch;
+    struct wsg_watch signal; /* signalfd: SIGINT and SIGTERM end the run */
+    uint8_t *rx;             /* one receive buffer for every transport */
+    struct wsg_ctl *control; /* NULL: no control channel */
     struct wsg_log log; /* the communication log (--log); closed: f NULL */
 };
 
-/* Set up the grippers, the loop and every transport the options enable. On
- * failure print "wsgemu: ..." and return -errno; wsg_daemon_close is safe
- * either way. */
+/* Set up the grippers, the reactor and its services, and every transport the
+ * options enable. On failure print "wsgemu: ..." and return -errno;
+ * wsg_daemon_close is safe either way. */
 int wsg_daemon_open(struct wsg_daemon *d);
 /* Print the ready line on stdout and flush it. */
 int wsg_daemon_announce(struct wsg_daemon *d);

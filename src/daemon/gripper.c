@@ -103,10 +103,46 @@ uint64_t wsg_gripper_delay_dropped(const struct wsg_gripper *g)
     return n;
 }
 
-int wsg_gripper_busy(const struct wsg_gripper *g)
+uint64_t wsg_gripper_next(const struct wsg_gripper *g)
 {
-    return wsg_device_busy(&g->dev) ||
-           (g->delay && wsg_gripper_delayed(g) > 0);
+    uint64_t best = wsg_device_next(&g->dev);
+    uint64_t now = g->dev.axis.time_us, step = g->dev.axis.cfg.step_us;
+    size_t i;
+
+    for (i = 0; g->delay && i < g->ntransports && best > 1; i++) {
+        uint64_t due = wsg_delay_next_due(&g->delay[i]), k;
+
+        if (due == UINT64_MAX)
+            continue;
+        /* Released after a step: the first that ends at or after it. */
+        k = due > now ? (due - now + step - 1) / step : 1;
+        if (k < best)
+            best = k;
+    }
+    return best;
+}
+
+uint64_t wsg_gripper_process(struct wsg_gripper *g, uint64_t n)
+{
+    uint64_t ran = 0;
+
+    while (n > 0) {
+        uint64_t k = wsg_gripper_next(g);
+
+        if (k > 1) {
+            uint64_t jump = k - 1 < n ? k - 1 : n;
+
+            wsg_device_advance_idle(&g->dev, jump);
+            n -= jump;
+            continue;
+        }
+        wsg_device_step(&g->dev);
+        wsg_device_poll_streaming(&g->dev);
+        wsg_gripper_release(g);
+        ran++;
+        n--;
+    }
+    return ran;
 }
 
 void wsg_gripper_fini(struct wsg_gripper *g)

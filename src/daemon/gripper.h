@@ -5,10 +5,11 @@
  * gripper is independent of the others, down to its own ports, session
  * tags and simulated time.
  *
- * The loop steps only the grippers on its active list. A gripper off the
- * list lets its simulated time lag behind the loop's grid and catches up in
- * one step-free jump (wsg_device_advance_idle) when something touches it,
- * which is exact because an idle model cannot change.
+ * The scheduler (sched.h) runs a gripper only when it has a deadline: it
+ * consumes the elapsed steps with wsg_gripper_process, which steps the
+ * model where something can change and jumps the stretches where nothing
+ * is due (an idle model cannot change), and asks wsg_gripper_next when
+ * the gripper next needs to run.
  *
  * With --latency, what the gripper sends waits in a delay line per
  * interface (the device's output hook puts it there) and leaves when the
@@ -32,12 +33,14 @@ struct wsg_gripper {
     unsigned index; /* 0.. in the fleet, in ready line order */
     struct wsg_transport transports[WSG_TRANSPORT_MAX];
     size_t ntransports;
-    /* Scheduling (the loop's): the grid step the device's time stands at,
-     * and the links of the active and touched lists. */
+    /* The scheduler's: the grid step the device's time stands at, the
+     * step of its deadline, its place in the deadline heap, and the link
+     * of the list of grippers touched in this batch. */
+    struct wsg_sched *sched;
     uint64_t at;
-    struct wsg_gripper *next_active;
+    uint64_t due;
+    size_t heap_idx;
     struct wsg_gripper *next_touched;
-    uint8_t active;
     uint8_t touched;
     struct wsg_log_tap tap; /* the communication log's view of it */
     /* --latency: delay[i] holds what transports[i] is to send; NULL
@@ -55,8 +58,14 @@ int wsg_gripper_set_latency(struct wsg_gripper *g, uint32_t ms,
 /* Send what is due at g's simulated time, to sessions still there (a
  * session that is gone loses its packets). */
 void wsg_gripper_release(struct wsg_gripper *g);
-/* Steps matter: the model or a stream has work, or packets wait. */
-int wsg_gripper_busy(const struct wsg_gripper *g);
+/* g's next deadline in model steps from its time (at least 1): the
+ * device's (wsg_device_next) or the first delayed packet's, whichever
+ * comes first; UINT64_MAX when nothing is due. */
+uint64_t wsg_gripper_next(const struct wsg_gripper *g);
+/* Consume n steps of elapsed time: model steps, stream polls and releases
+ * of delayed packets at every step where something is due, one jump over
+ * each stretch where nothing is. Returns the model steps run. */
+uint64_t wsg_gripper_process(struct wsg_gripper *g, uint64_t n);
 /* Packets waiting in g's delay lines, and those dropped because a line
  * was full (64 KiB). */
 size_t wsg_gripper_delayed(const struct wsg_gripper *g);

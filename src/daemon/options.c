@@ -10,7 +10,7 @@
 #include "options.h"
 
 #include "delay.h" /* the latencies it takes */
-#include "loop.h"  /* the time scales it runs */
+#include "sched.h" /* the time scales it runs */
 #include "wsg/device.h"
 
 #include <arpa/inet.h>
@@ -616,10 +616,10 @@ static int set_option(struct wsg_options *o, int id, const char *val,
         return -1;
     }
     case OPT_TIME_SCALE:
-        if (parse_double(val, &d) < 0 || d < WSG_LOOP_SCALE_MIN ||
-            d > WSG_LOOP_SCALE_MAX) {
+        if (parse_double(val, &d) < 0 || d < WSG_SCHED_SCALE_MIN ||
+            d > WSG_SCHED_SCALE_MAX) {
             snprintf(err, errcap, "'%s' is not a number in %g..%g", val,
-                     WSG_LOOP_SCALE_MIN, WSG_LOOP_SCALE_MAX);
+                     WSG_SCHED_SCALE_MIN, WSG_SCHED_SCALE_MAX);
             return -1;
         }
         o->time_scale = d;

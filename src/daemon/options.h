@@ -11,6 +11,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "transport.h" /* struct wsg_endpoint */
 #include "wsg/axis.h"
 
 #define WSG_STEP_US_DEFAULT    1000u
@@ -35,12 +36,6 @@
 #define WSG_GRIPPERS_MAX 10000u
 /* Room for a pty path with a fleet's number counted into it. */
 #define WSG_OPTIONS_PATH_MAX 4096u
-
-/* An IPv4 endpoint as given on the command line. */
-struct wsg_endpoint {
-    uint8_t addr[4]; /* a.b.c.d in this order */
-    uint16_t port;   /* host order; 0 lets the kernel pick */
-};
 
 struct wsg_options {
     /* Interfaces. With none given on the command line: TCP and UDP on

@@ -60,7 +60,7 @@ struct wsg_can {
     struct wsg_watch watch; /* the raw socket */
     struct wsg_watch timer; /* retry timerfd, armed while qlen > 0 */
     struct wsg_transport *t;
-    struct wsg_loop *loop;
+    struct wsg_reactor *reactor;
     struct wsg_device *dev;
     char iface[IFNAMSIZ];
     canid_t rx_id; /* commands */
@@ -345,11 +345,11 @@ static void can_close(struct wsg_transport *t)
      * but the device is told for symmetry with the other transports. */
     wsg_device_session_closed(can->dev, &can->session);
     if (can->timer.fd >= 0) {
-        wsg_loop_watch_del(can->loop, &can->timer);
+        wsg_reactor_del(can->reactor, &can->timer);
         close(can->timer.fd);
     }
     if (can->watch.fd >= 0) {
-        wsg_loop_watch_del(can->loop, &can->watch);
+        wsg_reactor_del(can->reactor, &can->watch);
         close(can->watch.fd);
     }
     free(can);
@@ -372,10 +372,10 @@ static void can_warn_if_down(struct wsg_can *can)
 }
 
 static int can_open(struct wsg_transport *t,
-                    const struct wsg_transport_env *env, char *err,
-                    size_t errlen)
+                    const struct wsg_transport_env *env, const void *config,
+                    char *err, size_t errlen)
 {
-    const struct wsg_options *opt = env->opt;
+    const struct wsg_can_config *cfg = config;
     struct can_filter filter;
     struct sockaddr_can sa;
     struct wsg_can *can;
@@ -390,16 +390,15 @@ static int can_open(struct wsg_transport *t,
     }
     t->state = can;
     can->t = t;
-    can->loop = env->loop;
+    can->reactor = env->reactor;
     can->dev = env->dev;
-    can->check_crc = opt->check_crc;
-    can->rx_id = opt->can_id & CAN_SFF_MASK;
-    can->tx_id = (opt->can_id + 1u) & CAN_SFF_MASK;
-    can->watch.owner = t;
-    can->timer.owner = t;
-    can->timer.fd = -1;
+    can->check_crc = cfg->check_crc;
+    can->rx_id = cfg->id & CAN_SFF_MASK;
+    can->tx_id = (cfg->id + 1u) & CAN_SFF_MASK;
+    wsg_transport_watch_init(t, &can->watch, -1);
+    wsg_transport_watch_init(t, &can->timer, -1);
     /* The option parser allows 15 characters: IFNAMSIZ with its NUL. */
-    snprintf(can->iface, sizeof can->iface, "%s", opt->can_iface);
+    snprintf(can->iface, sizeof can->iface, "%s", cfg->iface);
 
     step = NULL;
     can->watch.fd =
@@ -446,12 +445,12 @@ static int can_open(struct wsg_transport *t,
     if (can->timer.fd < 0)
         goto fail_errno;
     step = "epoll";
-    r = wsg_loop_watch_add(can->loop, &can->watch, EPOLLIN);
+    r = wsg_reactor_add(can->reactor, &can->watch, EPOLLIN);
     if (r < 0)
         goto fail;
-    r = wsg_loop_watch_add(can->loop, &can->timer, EPOLLIN);
+    r = wsg_reactor_add(can->reactor, &can->timer, EPOLLIN);
     if (r < 0) {
-        wsg_loop_watch_del(can->loop, &can->watch);
+        wsg_reactor_del(can->reactor, &can->watch);
         goto fail;
     }
     wsg_parser_init(&can->parser, can->check_crc);
@@ -466,10 +465,10 @@ fail_errno:
     r = -errno;
 fail:
     if (step)
-        snprintf(err, errlen, "cannot open can %s: %s: %s%s", opt->can_iface,
-                 step, strerror(-r), hint);
+        snprintf(err, errlen, "cannot open can %s: %s: %s%s", cfg->iface, step,
+                 strerror(-r), hint);
     else
-        snprintf(err, errlen, "cannot open can %s: %s%s", opt->can_iface,
+        snprintf(err, errlen, "cannot open can %s: %s%s", cfg->iface,
                  strerror(-r), hint);
     if (can) {
         if (can->timer.fd >= 0)
@@ -489,5 +488,5 @@ const struct wsg_transport_ops wsg_can_ops = {
     .handle = can_handle,
     .describe = can_describe,
     .lookup = can_lookup,
-    .settle = NULL,
+    .reap = NULL,
 };

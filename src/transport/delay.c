@@ -152,3 +152,13 @@ size_t wsg_delay_pending(const struct wsg_delay *dl)
 {
     return dl->count;
 }
+
+uint64_t wsg_delay_next_due(const struct wsg_delay *dl)
+{
+    struct wsg_delay_rec rec;
+
+    if (dl->count == 0)
+        return UINT64_MAX;
+    memcpy(&rec, dl->buf + dl->head, sizeof rec);
+    return rec.due_us;
+}

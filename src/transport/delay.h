@@ -65,5 +65,8 @@ size_t wsg_delay_release(struct wsg_delay *dl, uint64_t now_us,
                          wsg_delay_out_fn out, void *ctx);
 /* Packets waiting. */
 size_t wsg_delay_pending(const struct wsg_delay *dl);
+/* When the oldest packet is due (those behind it wait for it), or
+ * UINT64_MAX when none waits. */
+uint64_t wsg_delay_next_due(const struct wsg_delay *dl);
 
 #endif

@@ -9,7 +9,7 @@
  * it is, the emulator sends nothing (its packets are lost, as on a real
  * line) and must not wake: after the last close of the slave the master
  * polls POLLHUP for good, so it leaves the epoll set and an inotify IN_OPEN
- * watch on the slave (through the loop's one inotify instance, shared by a
+ * watch on the slave (through the process's one inotify instance, shared by a
  * fleet's ptys) brings it back when a driver opens the port again. A
  * slave that was never opened shows no HUP, so the line starts out closed
  * and waiting for IN_OPEN too.
@@ -53,8 +53,10 @@
 
 struct wsg_pty {
     struct wsg_watch master; /* the master side of the pseudo-terminal */
-    struct wsg_watch notify; /* the loop's file watch: IN_OPEN of the slave */
-    struct wsg_loop *loop;
+    struct wsg_watch notify; /* a file watch: IN_OPEN of the slave */
+    struct wsg_transport *t;
+    struct wsg_reactor *reactor;
+    struct wsg_fswatch *fswatch;
     struct wsg_device *dev;
     char *path; /* as given: the ready line shows it so */
     int check_crc;
@@ -86,7 +88,7 @@ static void report_drops(struct wsg_pty *pty)
 static void hang_up_later(struct wsg_pty *pty)
 {
     pty->hup = 1;
-    wsg_loop_touch(pty->loop, pty->master.owner->gripper);
+    wsg_transport_defer(pty->t);
 }
 
 static void set_events(struct wsg_pty *pty, uint32_t events)
@@ -95,7 +97,7 @@ static void set_events(struct wsg_pty *pty, uint32_t events)
 
     if (!pty->active || pty->events == events)
         return;
-    r = wsg_loop_watch_mod(pty->loop, &pty->master, events);
+    r = wsg_reactor_mod(pty->reactor, &pty->master, events);
     if (r < 0) {
         /* Cannot happen with a registered descriptor; if it does, start
          * over as if the port had been closed. */
@@ -224,7 +226,7 @@ static void activate(struct wsg_pty *pty)
     if (pty->active)
         return;
     pty->events = EPOLLIN;
-    r = wsg_loop_watch_add(pty->loop, &pty->master, pty->events);
+    r = wsg_reactor_add(pty->reactor, &pty->master, pty->events);
     if (r < 0) {
         fprintf(stderr, "wsgemu: pty %s: epoll: %s\n", pty->path,
                 strerror(-r));
@@ -241,7 +243,7 @@ static void hang_up(struct wsg_pty *pty)
 {
     pty->hup = 0;
     if (pty->active) {
-        wsg_loop_watch_del(pty->loop, &pty->master);
+        wsg_reactor_del(pty->reactor, &pty->master);
         pty->active = 0;
     }
     report_drops(pty);
@@ -288,7 +290,7 @@ static void pty_handle(struct wsg_transport *t, struct wsg_watch *w,
         hang_up_later(pty);
 }
 
-static void pty_settle(struct wsg_transport *t)
+static void pty_reap(struct wsg_transport *t)
 {
     struct wsg_pty *pty = t->state;
 
@@ -369,8 +371,8 @@ static void pty_free(struct wsg_pty *pty)
 {
     unlink_ours(pty);
     if (pty->active)
-        wsg_loop_watch_del(pty->loop, &pty->master);
-    wsg_loop_fswatch_del(pty->loop, pty->wd);
+        wsg_reactor_del(pty->reactor, &pty->master);
+    wsg_fswatch_del(pty->fswatch, pty->wd);
     if (pty->master.fd >= 0)
         close(pty->master.fd);
     free(pty->path);
@@ -411,9 +413,10 @@ static int make_raw(int fd)
 }
 
 static int pty_open(struct wsg_transport *t,
-                    const struct wsg_transport_env *env, char *err,
-                    size_t errlen)
+                    const struct wsg_transport_env *env, const void *config,
+                    char *err, size_t errlen)
 {
+    const struct wsg_pty_config *cfg = config;
     struct wsg_pty *pty;
     const char *step = "setup";
     int r;
@@ -426,15 +429,15 @@ static int pty_open(struct wsg_transport *t,
     }
     memset(pty, 0, offsetof(struct wsg_pty, out));
     wsg_outq_init(&pty->out, 0);
-    pty->master.fd = -1;
-    pty->notify.fd = -1;
+    wsg_transport_watch_init(t, &pty->master, -1);
+    wsg_transport_watch_init(t, &pty->notify, -1);
     pty->wd = -1;
-    pty->master.owner = t;
-    pty->notify.owner = t;
-    pty->loop = env->loop;
+    pty->t = t;
+    pty->reactor = env->reactor;
+    pty->fswatch = env->fswatch;
     pty->dev = env->dev;
-    pty->check_crc = env->opt->check_crc;
-    pty->path = strdup(env->opt->pty_path);
+    pty->check_crc = cfg->check_crc;
+    pty->path = strdup(cfg->path);
     if (!pty->path) {
         r = -ENOMEM;
         goto fail;
@@ -461,7 +464,7 @@ static int pty_open(struct wsg_transport *t,
     if (r < 0)
         goto fail;
     step = "inotify";
-    r = wsg_loop_fswatch_add(pty->loop, pty->slave, IN_OPEN, &pty->notify);
+    r = wsg_fswatch_add(pty->fswatch, pty->slave, IN_OPEN, &pty->notify);
     if (r < 0)
         goto fail;
     pty->wd = r;
@@ -484,8 +487,7 @@ fail_errno:
     r = -errno;
 fail:
     snprintf(err, errlen, "cannot open pty %s: %s: %s",
-             env->opt->pty_path ? env->opt->pty_path : "?", step,
-             strerror(-r));
+             cfg->path ? cfg->path : "?", step, strerror(-r));
     if (pty)
         pty_free(pty);
     t->state = NULL;
@@ -499,5 +501,5 @@ const struct wsg_transport_ops wsg_pty_ops = {
     .handle = pty_handle,
     .describe = pty_describe,
     .lookup = pty_lookup,
-    .settle = pty_settle,
+    .reap = pty_reap,
 };

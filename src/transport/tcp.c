@@ -78,7 +78,7 @@ struct wsg_tcp_conn {
 struct wsg_tcp {
     struct wsg_watch watch; /* the listening socket */
     struct wsg_transport *t;
-    struct wsg_loop *loop;
+    struct wsg_reactor *reactor;
     struct wsg_device *dev;
     uint32_t tag_base;
     int check_crc;
@@ -103,7 +103,7 @@ static void conn_kill(struct wsg_tcp_conn *c, const char *why)
     c->dead = 1;
     c->tcp->ndead++;
     /* Settled after the batch, also when a step's send ended it. */
-    wsg_loop_touch(c->tcp->loop, c->tcp->t->gripper);
+    wsg_transport_defer(c->tcp->t);
     if (why)
         fprintf(stderr, "wsgemu: tcp %s: closing: %s\n", c->peer, why);
 }
@@ -114,7 +114,7 @@ static void conn_set_events(struct wsg_tcp_conn *c, uint32_t events)
 
     if (c->events == events)
         return;
-    r = wsg_loop_watch_mod(c->tcp->loop, &c->watch, events);
+    r = wsg_reactor_mod(c->tcp->reactor, &c->watch, events);
     if (r < 0) {
         conn_kill(c, strerror(-r));
         return;
@@ -197,7 +197,7 @@ static void conn_read(struct wsg_tcp_conn *c)
 
 static void conn_free(struct wsg_tcp *tcp, struct wsg_tcp_conn *c)
 {
-    wsg_loop_watch_del(tcp->loop, &c->watch);
+    wsg_reactor_del(tcp->reactor, &c->watch);
     if (c->reset) {
         /* A plain close would queue the FIN behind the output the client
          * does not read: it would never learn that it was dropped, and
@@ -304,13 +304,12 @@ static void conn_accept(struct wsg_tcp *tcp, int fd,
     if (setsockopt(fd, SOL_SOCKET, SO_SNDBUF, &sndbuf, sizeof sndbuf) < 0)
         fprintf(stderr, "wsgemu: tcp %s: SO_SNDBUF: %s\n", name,
                 strerror(errno));
-    c->watch.owner = tcp->t;
-    c->watch.fd = fd;
+    wsg_transport_watch_init(tcp->t, &c->watch, fd);
     c->tcp = tcp;
     c->slot = (unsigned)slot;
     c->events = EPOLLIN | EPOLLRDHUP;
     memcpy(c->peer, name, sizeof name);
-    r = wsg_loop_watch_add(tcp->loop, &c->watch, c->events);
+    r = wsg_reactor_add(tcp->reactor, &c->watch, c->events);
     if (r < 0) {
         fprintf(stderr, "wsgemu: tcp %s: refused: %s\n", name, strerror(-r));
         close(fd);
@@ -383,7 +382,7 @@ static struct wsg_session *tcp_lookup(struct wsg_transport *t, uint32_t tag)
     return &c->session;
 }
 
-static void tcp_settle(struct wsg_transport *t)
+static void tcp_reap(struct wsg_transport *t)
 {
     struct wsg_tcp *tcp = t->state;
     unsigned i;
@@ -436,7 +435,7 @@ static void tcp_close(struct wsg_transport *t)
         if (tcp->slots[i])
             conn_close(tcp, tcp->slots[i]);
     if (tcp->watch.fd >= 0) {
-        wsg_loop_watch_del(tcp->loop, &tcp->watch);
+        wsg_reactor_del(tcp->reactor, &tcp->watch);
         close(tcp->watch.fd);
     }
     if (tcp->spare_fd >= 0)
@@ -446,9 +445,10 @@ static void tcp_close(struct wsg_transport *t)
 }
 
 static int tcp_open(struct wsg_transport *t,
-                    const struct wsg_transport_env *env, char *err,
-                    size_t errlen)
+                    const struct wsg_transport_env *env, const void *config,
+                    char *err, size_t errlen)
 {
+    const struct wsg_tcp_config *cfg = config;
     struct wsg_tcp *tcp = calloc(1, sizeof *tcp);
     int r;
 
@@ -457,21 +457,21 @@ static int tcp_open(struct wsg_transport *t,
         return -ENOMEM;
     }
     tcp->t = t;
-    tcp->loop = env->loop;
+    tcp->reactor = env->reactor;
     tcp->dev = env->dev;
     tcp->tag_base = t->tag_base;
-    tcp->check_crc = env->opt->check_crc;
-    tcp->max_clients = env->opt->max_clients;
+    tcp->check_crc = cfg->check_crc;
+    tcp->max_clients = cfg->max_clients;
     if (tcp->max_clients == 0 || tcp->max_clients > WSG_TCP_CONN_MAX)
         tcp->max_clients = WSG_TCP_CONN_MAX;
-    tcp->watch.owner = t;
+    wsg_transport_watch_init(t, &tcp->watch, -1);
     tcp->spare_fd = open("/dev/null", O_RDONLY | O_CLOEXEC);
-    r = wsg_transport_listen_tcp(&env->opt->tcp, WSG_TCP_BACKLOG, "tcp",
-                                 tcp->local, sizeof tcp->local, err, errlen);
+    r = wsg_transport_listen_tcp(&cfg->ep, WSG_TCP_BACKLOG, "tcp", tcp->local,
+                                 sizeof tcp->local, err, errlen);
     if (r < 0)
         goto fail;
     tcp->watch.fd = r;
-    r = wsg_loop_watch_add(tcp->loop, &tcp->watch, EPOLLIN);
+    r = wsg_reactor_add(tcp->reactor, &tcp->watch, EPOLLIN);
     if (r < 0) {
         snprintf(err, errlen, "cannot listen on tcp %s: epoll: %s", tcp->local,
                  strerror(-r));
@@ -496,6 +496,6 @@ const struct wsg_transport_ops wsg_tcp_ops = {
     .handle = tcp_handle,
     .describe = tcp_describe,
     .lookup = tcp_lookup,
-    .settle = tcp_settle,
+    .reap = tcp_reap,
     .drop_all = tcp_drop_all,
 };

@@ -1,8 +1,9 @@
 /*
  * What the daemon does with a gripper's transports at once: route a
- * session tag to the transport that issued it and finish deferred closes;
- * and what they share: the TCP listeners (the interface and the control
- * channel), addresses and listen errors in messages.
+ * session tag to the transport that issued it and reap deferred closes;
+ * the watches that take a transport's events to it between its host's
+ * hooks; and what they share: the TCP listeners (the interface and the
+ * control channel), addresses and listen errors in messages.
  */
 #define _GNU_SOURCE
 
@@ -28,13 +29,36 @@ struct wsg_session *wsg_transport_lookup(struct wsg_transport *ts, size_t n,
     return t->ops->lookup ? t->ops->lookup(t, tag) : NULL;
 }
 
-void wsg_transport_settle(struct wsg_transport *ts, size_t n)
+void wsg_transport_reap(struct wsg_transport *ts, size_t n)
 {
     size_t i;
 
     for (i = 0; i < n; i++)
-        if (ts[i].ops->settle)
-            ts[i].ops->settle(&ts[i]);
+        if (ts[i].ops->reap)
+            ts[i].ops->reap(&ts[i]);
+}
+
+static void wsg_transport_event(struct wsg_watch *w, uint32_t events)
+{
+    struct wsg_transport *t = w->ctx;
+
+    if (t->host.enter)
+        t->host.enter(t->host.ctx);
+    t->ops->handle(t, w, events);
+    if (t->host.leave)
+        t->host.leave(t->host.ctx);
+}
+
+void wsg_transport_watch_init(struct wsg_transport *t, struct wsg_watch *w,
+                              int fd)
+{
+    wsg_watch_init(w, fd, wsg_transport_event, t);
+}
+
+void wsg_transport_defer(struct wsg_transport *t)
+{
+    if (t->host.defer)
+        t->host.defer(t->host.ctx);
 }
 
 void wsg_transport_listen_error(char *buf, size_t len, const char *proto,

@@ -1,8 +1,15 @@
 /*
  * The interface every host interface of the emulator implements (TCP, UDP,
- * pty, CAN, and the control channel): an ops table plus a small record. A
- * transport keeps all its state in its own struct behind t->state and
- * registers its descriptors with the loop through struct wsg_watch.
+ * pty, CAN): an ops table plus a small record. A transport keeps all its
+ * state in its own struct behind t->state, is opened from a config struct
+ * of its own (struct wsg_tcp_config, ...), and registers its descriptors
+ * with the reactor through watches made by wsg_transport_watch_init, whose
+ * events reach its handle() between the host's enter and leave hooks.
+ *
+ * A transport knows neither the scheduler nor the options: the daemon
+ * gives it a host (what to call around its events, and when it has marked
+ * a peer gone) and the environment it needs (the reactor, the process's
+ * file watches, the device, a receive buffer).
  *
  * Session tags carry the transport's index in their top bits, so the
  * device's single lookup callback finds the owning transport in O(1) and the
@@ -14,8 +21,8 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "loop.h"
-#include "options.h"
+#include "fswatch.h"
+#include "reactor.h"
 #include "wsg/device.h"
 
 #define WSG_TRANSPORT_MAX 8u
@@ -24,41 +31,80 @@
 #define WSG_TAG_LOCAL_MASK      ((1u << WSG_TAG_TRANSPORT_SHIFT) - 1u)
 
 struct wsg_transport;
-struct wsg_gripper;
 
-/* What a transport gets from the daemon when it opens. opt holds this
- * gripper's own interface settings (a fleet counts them up per gripper)
- * and lives only during open: keep copies, not pointers. */
+/* An IPv4 endpoint as given on the command line. */
+struct wsg_endpoint {
+    uint8_t addr[4]; /* a.b.c.d in this order */
+    uint16_t port;   /* host order; 0 lets the kernel pick */
+};
+
+/* Each transport's own settings. */
+struct wsg_tcp_config {
+    struct wsg_endpoint ep;
+    unsigned max_clients; /* connections at once; more are refused */
+    int check_crc;
+};
+
+struct wsg_udp_config {
+    struct wsg_endpoint ep; /* where it listens */
+    uint16_t remote_port;   /* where answers go, at the sender's IP */
+    int check_crc;
+};
+
+struct wsg_pty_config {
+    const char *path; /* the link to the slave side */
+    int check_crc;
+};
+
+struct wsg_can_config {
+    const char *iface;
+    uint32_t id; /* commands on id, answers on id + 1 */
+    int check_crc;
+};
+
+/* What a transport gets from the daemon when it opens; copy what it needs
+ * (env lives only during open). */
 struct wsg_transport_env {
-    struct wsg_loop *loop;
-    struct wsg_device *dev; /* NULL for the control channel */
-    const struct wsg_options *opt;
-    struct wsg_gripper *gripper;
+    struct wsg_reactor *reactor;
+    struct wsg_fswatch *fswatch; /* file watches (the pty's) */
+    struct wsg_device *dev;
+    uint8_t *rx; /* a receive buffer, shared: one handler runs at a time */
+    size_t rxlen;
+};
+
+/* The transport's host (the daemon, for its gripper): called around each
+ * event, so the gripper's time is current and it is rescheduled after;
+ * and when a peer has been marked gone, even from within a step's send, so
+ * that reap() runs after the batch. Any may be NULL. */
+struct wsg_transport_host {
+    void (*enter)(void *ctx);
+    void (*leave)(void *ctx);
+    void (*defer)(void *ctx);
+    void *ctx;
 };
 
 struct wsg_transport_ops {
     const char *name; /* key on the ready line: "tcp" */
-    /* Open from env->opt; on failure put a one-line reason (naming the
-     * address) in err and return -errno. */
+    /* Open from cfg (this transport's config struct); on failure put a
+     * one-line reason (naming the address) in err and return -errno. */
     int (*open)(struct wsg_transport *t, const struct wsg_transport_env *env,
-                char *err, size_t errlen);
+                const void *cfg, char *err, size_t errlen);
     /* Close every peer (wsg_device_session_closed first), free all. */
     void (*close)(struct wsg_transport *t);
-    /* An epoll event on one of the transport's watches. Must not free
-     * anything a later event of the same epoll_wait batch may name: peers
-     * that go away are only marked, and freed by settle. */
+    /* An event on one of the transport's watches. Must not free anything
+     * a later event of the same batch may name: peers that go away are
+     * only marked (wsg_transport_defer), and freed by reap. */
     void (*handle)(struct wsg_transport *t, struct wsg_watch *w,
                    uint32_t events);
     /* The value for the ready line, e.g. "127.0.0.1:41234". */
     int (*describe)(const struct wsg_transport *t, char *buf, size_t len);
     /* Optional (NULL: no sessions). A live session by tag, else NULL. */
     struct wsg_session *(*lookup)(struct wsg_transport *t, uint32_t tag);
-    /* Optional. Between epoll batches: finish closing marked peers. */
-    void (*settle)(struct wsg_transport *t);
+    /* Optional. After a batch: finish closing marked peers. */
+    void (*reap)(struct wsg_transport *t);
     /* Optional (the control channel's drop). End every connection as if
-     * its peer had gone: only marked, so settle closes them the usual way
-     * and a close without 07h brings the FAST STOP rule. Returns how many
-     * were dropped. */
+     * its peer had gone: the device is told at once, the sockets are
+     * closed by reap. Returns how many were dropped. */
     unsigned (*drop_all)(struct wsg_transport *t);
 };
 
@@ -66,18 +112,20 @@ struct wsg_transport {
     const struct wsg_transport_ops *ops;
     void *state;       /* the transport's own struct */
     uint32_t tag_base; /* (index + 1) << WSG_TAG_TRANSPORT_SHIFT */
-    /* Whose interface it is (NULL: the process's, the control channel):
-     * the loop brings that gripper's time up to date before its events. */
-    struct wsg_gripper *gripper;
+    struct wsg_transport_host host;
 };
+
+/* A watch of t on fd: its events go to t->ops->handle, between the host's
+ * enter and leave. */
+void wsg_transport_watch_init(struct wsg_transport *t, struct wsg_watch *w,
+                              int fd);
+/* t marked a peer gone: have it reaped after the batch. */
+void wsg_transport_defer(struct wsg_transport *t);
 
 extern const struct wsg_transport_ops wsg_tcp_ops;
 extern const struct wsg_transport_ops wsg_udp_ops;
 extern const struct wsg_transport_ops wsg_pty_ops;
 extern const struct wsg_transport_ops wsg_can_ops;
-/* Not a gripper interface: the control channel (control.c), opened last so
- * that it ends the ready line. */
-extern const struct wsg_transport_ops wsg_control_ops;
 
 struct sockaddr_in;
 
@@ -104,6 +152,7 @@ void wsg_transport_listen_error(char *buf, size_t len, const char *proto,
 /* Route a tag to the transport that issued it. */
 struct wsg_session *wsg_transport_lookup(struct wsg_transport *ts, size_t n,
                                          uint32_t tag);
-void wsg_transport_settle(struct wsg_transport *ts, size_t n);
+/* Every transport's reap (after a batch). */
+void wsg_transport_reap(struct wsg_transport *ts, size_t n);
 
 #endif

@@ -47,7 +47,9 @@ struct wsg_udp_peer {
 struct wsg_udp {
     struct wsg_watch watch;
     struct wsg_device *dev;
-    struct wsg_loop *loop;
+    struct wsg_reactor *reactor;
+    uint8_t *rx; /* the shared receive buffer */
+    size_t rxlen;
     uint32_t tag_base;
     int check_crc;
     uint16_t remote_port;
@@ -124,8 +126,8 @@ static void udp_handle(struct wsg_transport *t, struct wsg_watch *w,
         struct sockaddr_in from;
         socklen_t flen = sizeof from;
         struct wsg_udp_peer *p;
-        ssize_t n = recvfrom(udp->watch.fd, udp->loop->rx, udp->loop->rxlen,
-                             MSG_DONTWAIT, (struct sockaddr *)&from, &flen);
+        ssize_t n = recvfrom(udp->watch.fd, udp->rx, udp->rxlen, MSG_DONTWAIT,
+                             (struct sockaddr *)&from, &flen);
 
         if (n < 0) {
             if (errno == EINTR)
@@ -137,7 +139,7 @@ static void udp_handle(struct wsg_transport *t, struct wsg_watch *w,
         p = udp_peer(udp, &from);
         p->heard = ++udp->clock;
         wsg_device_input_datagram(udp->dev, &p->session, udp->check_crc,
-                                  udp->loop->rx, (size_t)n);
+                                  udp->rx, (size_t)n);
     }
 }
 
@@ -165,7 +167,7 @@ static void udp_close(struct wsg_transport *t)
     if (!udp)
         return;
     if (udp->watch.fd >= 0) {
-        wsg_loop_watch_del(udp->loop, &udp->watch);
+        wsg_reactor_del(udp->reactor, &udp->watch);
         close(udp->watch.fd);
     }
     free(udp);
@@ -173,10 +175,11 @@ static void udp_close(struct wsg_transport *t)
 }
 
 static int udp_open(struct wsg_transport *t,
-                    const struct wsg_transport_env *env, char *err,
-                    size_t errlen)
+                    const struct wsg_transport_env *env, const void *config,
+                    char *err, size_t errlen)
 {
-    const struct wsg_endpoint *ep = &env->opt->udp;
+    const struct wsg_udp_config *cfg = config;
+    const struct wsg_endpoint *ep = &cfg->ep;
     struct wsg_udp *udp;
     struct sockaddr_in sa;
     socklen_t salen = sizeof sa;
@@ -196,13 +199,15 @@ static int udp_open(struct wsg_transport *t,
     }
     t->state = udp;
     udp->dev = env->dev;
-    udp->loop = env->loop;
+    udp->reactor = env->reactor;
+    udp->rx = env->rx;
+    udp->rxlen = env->rxlen;
     udp->tag_base = t->tag_base;
-    udp->check_crc = env->opt->check_crc;
-    udp->remote_port = env->opt->udp_remote_port;
-    udp->watch.owner = t;
-    udp->watch.fd =
-        socket(AF_INET, SOCK_DGRAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
+    udp->check_crc = cfg->check_crc;
+    udp->remote_port = cfg->remote_port;
+    wsg_transport_watch_init(
+        t, &udp->watch,
+        socket(AF_INET, SOCK_DGRAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0));
     if (udp->watch.fd < 0)
         goto fail_errno;
     if (bind(udp->watch.fd, (struct sockaddr *)&sa, sizeof sa) < 0)
@@ -211,7 +216,7 @@ static int udp_open(struct wsg_transport *t,
         goto fail_errno;
     snprintf(udp->local, sizeof udp->local, "%s:%u", ip,
              (unsigned)ntohs(sa.sin_port));
-    r = wsg_loop_watch_add(udp->loop, &udp->watch, EPOLLIN);
+    r = wsg_reactor_add(udp->reactor, &udp->watch, EPOLLIN);
     if (r < 0)
         goto fail;
     return 0;
@@ -232,5 +237,5 @@ const struct wsg_transport_ops wsg_udp_ops = {
     .handle = udp_handle,
     .describe = udp_describe,
     .lookup = udp_lookup,
-    .settle = NULL,
+    .reap = NULL,
 };
