@@ -63,6 +63,7 @@ check_rows() {
     check "43h stream intervals (count)" yes
     check "idle wakes/s" yes
     check "idle CPU % of one core" yes
+    check "1 s stream, idle: wakes/s" yes
     check "moving: model steps/s" no
     check "moving: step overruns" no
     check "moving: CPU % of one core" no

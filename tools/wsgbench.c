@@ -1261,6 +1261,53 @@ static int bench_idle(struct bench *b)
     return rc < 0 ? -1 : 0;
 }
 
+/* A 43h stream of 1 s and nothing moving: the emulator runs the gripper
+ * from the stream's deadline, so it wakes about once a second (one wake
+ * per packet), not once per model step. */
+static int bench_slow_stream(struct bench *b)
+{
+    static const uint8_t sub[3] = {0x01, 0xE8, 0x03}; /* every 1000 ms */
+    struct proc_sample a[2], z[2];
+    double w[2] = {NAN, NAN};
+    struct link l[2];
+    int s, rc = -1;
+    struct row *r;
+
+    l[EMU].fd = l[REF].fd = -1;
+    l[EMU].own_rfd = l[REF].own_rfd = 0;
+    if (attach_lacks(b, "tcp", "1 s stream") ||
+        attach_nopid(b, "the emulator's wakes with a 1 s stream")) {
+        rc = 0;
+        goto cleanup;
+    }
+    for (s = 0; s < 2; s++)
+        if (open_link(b, &l[s], s, L_TCP) < 0 ||
+            link_sendf(&l[s], WSG_CMD_GET_WIDTH, sub, sizeof sub) < 0)
+            goto cleanup;
+    sleep_s(0.5); /* past the answer to the request itself */
+    for (s = 0; s < 2; s++)
+        if (b->pid[s] > 0 && proc_read(b->pid[s], &a[s]) < 0)
+            goto cleanup;
+    sleep_s(b->o.idle_s);
+    for (s = 0; s < 2; s++) {
+        if (b->pid[s] <= 0)
+            continue;
+        if (proc_read(b->pid[s], &z[s]) < 0)
+            goto cleanup;
+        w[s] = wakes_per_s(&a[s], &z[s]);
+    }
+    rc = 0;
+cleanup:
+    if (rc < 0)
+        msg("1 s stream: cannot subscribe or read /proc of the servers");
+    r = add_row(b, "1 s stream, idle: wakes/s", w[EMU], w[REF], 2);
+    set_target(r, T_LT, 2, 0, "~1");
+    for (s = 0; s < 2; s++)
+        if (l[s].fd >= 0)
+            link_close(&l[s]);
+    return rc;
+}
+
 /* ---- 5. the model's step rate while moving ---- */
 
 /* Measure for secs: steps/s and overruns from the control channel's stats,
@@ -2319,6 +2366,8 @@ int main(int argc, char **argv)
     if (bench_jitter(&b) < 0)
         b.failures++;
     if (bench_idle(&b) < 0)
+        b.failures++;
+    if (bench_slow_stream(&b) < 0)
         b.failures++;
     if (bench_moving(&b) < 0)
         b.failures++;

@@ -370,8 +370,10 @@ static void append(char *buf, size_t cap, size_t *used, const char *fmt, ...)
         *used += (size_t)n;
 }
 
-static void cmd_state(struct wsg_ctl_client *c)
+static void cmd_state(struct wsg_ctl_client *c, int argc, char **argv)
 {
+    (void)argc;
+    (void)argv;
     const struct wsg_gripper *g = c->ctl->cur;
     const struct wsg_device *d = &g->dev;
     const struct wsg_axis *ax = &d->axis;
@@ -413,8 +415,10 @@ static void cmd_state(struct wsg_ctl_client *c)
     reply(c, "ok %s", buf);
 }
 
-static void cmd_drop(struct wsg_ctl_client *c)
+static void cmd_drop(struct wsg_ctl_client *c, int argc, char **argv)
 {
+    (void)argc;
+    (void)argv;
     struct wsg_gripper *g = c->ctl->cur;
     unsigned n = 0;
     size_t i;
@@ -425,8 +429,10 @@ static void cmd_drop(struct wsg_ctl_client *c)
     reply(c, "ok dropped %u", n);
 }
 
-static void cmd_reset(struct wsg_ctl_client *c)
+static void cmd_reset(struct wsg_ctl_client *c, int argc, char **argv)
 {
+    (void)argc;
+    (void)argv;
     /* Streams end with the power cycle (wsg_device_reset). */
     wsg_device_reset(&c->ctl->cur->dev);
     reply(c, "ok reset");
@@ -454,8 +460,10 @@ static void cmd_gripper(struct wsg_ctl_client *c, int argc, char **argv)
 }
 
 /* The loop's figures, for benchmarks and to see a fleet's state. */
-static void cmd_stats(struct wsg_ctl_client *c)
+static void cmd_stats(struct wsg_ctl_client *c, int argc, char **argv)
 {
+    (void)argc;
+    (void)argv;
     const struct wsg_sched *l = c->ctl->sched;
 
     reply(c,
@@ -474,6 +482,7 @@ static void cmd_stats(struct wsg_ctl_client *c)
 }
 
 static void run_command(struct wsg_ctl_client *c, int argc, char **argv);
+static void cmd_help(struct wsg_ctl_client *c, int argc, char **argv);
 
 static void run_line(struct wsg_ctl_client *c, char *line)
 {
@@ -513,37 +522,59 @@ static void run_line(struct wsg_ctl_client *c, char *line)
     wsg_sched_check(c->ctl->sched, c->ctl->cur);
 }
 
+/* The commands: name, what runs it, whether it takes arguments (the rest
+ * are refused them here, once), and its form for help. */
+static const struct ctl_command {
+    const char *name;
+    void (*run)(struct wsg_ctl_client *c, int argc, char **argv);
+    int takes_args;
+    const char *form;
+} ctl_commands[] = {
+    {"part", cmd_part, 1, "part WIDTH [STIFFNESS]|none"},
+    {"obstacle", cmd_obstacle, 1, "obstacle WIDTH|none"},
+    {"fault", cmd_fault, 1, "fault NAME on|off"},
+    {"time", cmd_time, 1, "time [scale X|pause|step MS|resume]"},
+    {"state", cmd_state, 0, "state"},
+    {"drop", cmd_drop, 0, "drop"},
+    {"reset", cmd_reset, 0, "reset"},
+    {"gripper", cmd_gripper, 1, "gripper [N]"},
+    {"stats", cmd_stats, 0, "stats"},
+    {"help", cmd_help, 0, NULL},
+};
+
+#define CTL_NCOMMANDS (sizeof ctl_commands / sizeof ctl_commands[0])
+
+static void cmd_help(struct wsg_ctl_client *c, int argc, char **argv)
+{
+    char buf[WSG_CTL_REPLY_MAX - 8];
+    size_t used = 0, i;
+
+    (void)argc;
+    (void)argv;
+    buf[0] = '\0';
+    for (i = 0; i < CTL_NCOMMANDS; i++)
+        if (ctl_commands[i].form)
+            append(buf, sizeof buf, &used, "%s%s", used ? ", " : "",
+                   ctl_commands[i].form);
+    reply(c, "ok commands: %s", buf);
+}
+
 static void run_command(struct wsg_ctl_client *c, int argc, char **argv)
 {
-    if (strcmp(argv[0], "part") == 0)
-        cmd_part(c, argc, argv);
-    else if (strcmp(argv[0], "obstacle") == 0)
-        cmd_obstacle(c, argc, argv);
-    else if (strcmp(argv[0], "fault") == 0)
-        cmd_fault(c, argc, argv);
-    else if (strcmp(argv[0], "time") == 0)
-        cmd_time(c, argc, argv);
-    else if (strcmp(argv[0], "gripper") == 0)
-        cmd_gripper(c, argc, argv);
-    else if (argc > 1 &&
-             (strcmp(argv[0], "state") == 0 || strcmp(argv[0], "drop") == 0 ||
-              strcmp(argv[0], "reset") == 0 || strcmp(argv[0], "help") == 0 ||
-              strcmp(argv[0], "stats") == 0))
-        reply(c, "error %s takes no arguments", argv[0]);
-    else if (strcmp(argv[0], "state") == 0)
-        cmd_state(c);
-    else if (strcmp(argv[0], "drop") == 0)
-        cmd_drop(c);
-    else if (strcmp(argv[0], "reset") == 0)
-        cmd_reset(c);
-    else if (strcmp(argv[0], "stats") == 0)
-        cmd_stats(c);
-    else if (strcmp(argv[0], "help") == 0)
-        reply(c, "ok commands: part WIDTH [STIFFNESS]|none, obstacle "
-                 "WIDTH|none, fault NAME on|off, time [scale X|pause|step "
-                 "MS|resume], state, drop, reset, gripper [N], stats");
-    else
-        reply(c, "error unknown command '%.32s' (try help)", argv[0]);
+    size_t i;
+
+    for (i = 0; i < CTL_NCOMMANDS; i++) {
+        const struct ctl_command *k = &ctl_commands[i];
+
+        if (strcmp(argv[0], k->name) != 0)
+            continue;
+        if (argc > 1 && !k->takes_args)
+            reply(c, "error %s takes no arguments", argv[0]);
+        else
+            k->run(c, argc, argv);
+        return;
+    }
+    reply(c, "error unknown command '%.32s' (try help)", argv[0]);
 }
 
 static void client_input(struct wsg_ctl_client *c, const char *data, size_t n)
