@@ -33,11 +33,10 @@ struct wsg_gripper {
     unsigned index; /* 0.. in the fleet, in ready line order */
     struct wsg_transport transports[WSG_TRANSPORT_MAX];
     size_t ntransports;
-    /* The scheduler's: the grid step the device's time stands at, the
-     * step of its deadline, its place in the deadline heap, and the link
-     * of the list of grippers touched in this batch. */
+    /* The scheduler's: the grid step of its deadline, its place in the
+     * deadline heap, and the link of the list of grippers touched in this
+     * batch. Its time is its model's (dev.axis.time_us). */
     struct wsg_sched *sched;
-    uint64_t at;
     uint64_t due;
     size_t heap_idx;
     struct wsg_gripper *next_touched;

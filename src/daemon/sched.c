@@ -114,15 +114,15 @@ static void schedule(struct wsg_sched *s, struct wsg_gripper *g, uint64_t due)
 
 /* ---- time ---- */
 
-/* Run g through the steps up to the grid and reschedule it from there. */
+/* Run g through the steps up to the grid and reschedule it from there.
+ * The gripper's own time is its model's: on the grid, it stands at the
+ * step its model's time counts (one clock, read in steps). */
 static void run_to_grid(struct wsg_sched *s, struct wsg_gripper *g)
 {
-    uint64_t k;
+    uint64_t at = g->dev.axis.time_us / g->dev.axis.cfg.step_us, k;
 
-    if (g->at < s->grid) {
-        s->stats.dev_steps += wsg_gripper_process(g, s->grid - g->at);
-        g->at = s->grid;
-    }
+    if (at < s->grid)
+        s->stats.dev_steps += wsg_gripper_process(g, s->grid - at);
     k = wsg_gripper_next(g);
     schedule(s, g, k == WSG_SCHED_NEVER ? k : s->grid + k);
 }
@@ -294,7 +294,6 @@ int wsg_sched_set_grippers(struct wsg_sched *s, struct wsg_gripper *g,
     s->ngrippers = n;
     for (i = 0; i < n; i++) {
         g[i].sched = s;
-        g[i].at = s->grid;
         g[i].due = WSG_SCHED_NEVER;
         g[i].heap_idx = HEAP_NONE;
     }

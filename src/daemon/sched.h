@@ -71,7 +71,8 @@ struct wsg_sched {
 int wsg_sched_init(struct wsg_sched *s, struct wsg_reactor *r,
                    uint32_t step_us);
 void wsg_sched_fini(struct wsg_sched *s);
-/* The grippers it schedules (their sched and at are set here). Returns 0
+/* The grippers it schedules (their sched is set here): their time is
+ * their model's, on the grid from 0. Returns 0
  * or -ENOMEM. */
 int wsg_sched_set_grippers(struct wsg_sched *s, struct wsg_gripper *g,
                            size_t n);
