@@ -2,7 +2,8 @@
  * The gripper model driven by a fake clock: motion durations against the
  * trapezoid computed here independently, homing, grasping a part (held, no
  * part, part lost, force build-up), clamp and stop on block, soft limits,
- * FAST STOP, overdrive, and the system state flags at every stage.
+ * FAST STOP, overdrive, and the system state flags at every stage; the
+ * model's ranges of the values it takes (config settings, widths).
  */
 #include <errno.h>
 
@@ -737,8 +738,87 @@ static void test_world_at_once(void)
     CHECK_NEAR(t.dev.axis.width, 40.0 - 40.0 / 50.0, 1e-9);
 }
 
+/* The model's ranges, as the daemon's options check their settings and the
+ * session commands clamp into them. */
+static void test_config_ranges(void)
+{
+    static const struct {
+        const char *model;
+        enum wsg_axis_setting s;
+        double min, max;
+    } want[] = {
+        {"wsg50", WSG_AXIS_ACCELERATION, 100.0, 5000.0},
+        {"wsg50", WSG_AXIS_FORCE_LIMIT, 5.0, 80.0},
+        {"wsg50", WSG_AXIS_CLAMP_TRAVEL, 0.0, 110.0},
+        {"wsg50", WSG_AXIS_WIDTH_TOLERANCE, 0.0, 110.0},
+        {"wsg50", WSG_AXIS_WIDTH, 0.0, 110.0},
+        {"wsg50-210", WSG_AXIS_WIDTH, 0.0, 210.0},
+        {"wsg32", WSG_AXIS_FORCE_LIMIT, 5.0, 50.0},
+        {"wsg25", WSG_AXIS_FORCE_LIMIT, 5.0, 20.0},
+        {"wsg25", WSG_AXIS_CLAMP_TRAVEL, 0.0, 64.0},
+    };
+    size_t i;
+
+    for (i = 0; i < sizeof want / sizeof want[0]; i++) {
+        struct wsg_axis_config cfg, before;
+        struct wsg_axis_range r = {-1.0, -1.0};
+
+        REQUIRE(wsg_axis_config_init(&cfg, want[i].model) == 0);
+        r = wsg_axis_config_range(&cfg, want[i].s);
+        CHECK_NEAR(r.min, want[i].min, 1e-12);
+        CHECK_NEAR(r.max, want[i].max, 1e-12);
+        /* Outside (NaN too): refused, the range said, nothing written. */
+        before = cfg;
+        r.min = r.max = -1.0;
+        CHECK_EQ(wsg_axis_config_set(&cfg, want[i].s, want[i].max + 0.5, &r),
+                 -ERANGE);
+        CHECK_NEAR(r.min, want[i].min, 1e-12);
+        CHECK_NEAR(r.max, want[i].max, 1e-12);
+        CHECK_EQ(wsg_axis_config_set(&cfg, want[i].s, want[i].min - 0.5, NULL),
+                 -ERANGE);
+        CHECK_EQ(wsg_axis_config_set(&cfg, want[i].s, NAN, NULL), -ERANGE);
+        CHECK(memcmp(&cfg, &before, sizeof cfg) == 0);
+        /* Both ends are valid. */
+        CHECK_EQ(wsg_axis_config_set(&cfg, want[i].s, want[i].min, NULL), 0);
+        CHECK_EQ(wsg_axis_config_set(&cfg, want[i].s, want[i].max, NULL), 0);
+    }
+    {
+        struct wsg_axis_config cfg;
+        struct wsg_axis ax;
+
+        REQUIRE(wsg_axis_config_init(&cfg, "wsg32") == 0);
+        CHECK_EQ(wsg_axis_config_set(&cfg, WSG_AXIS_ACCELERATION, 200, NULL),
+                 0);
+        CHECK_NEAR(cfg.default_acc, 200.0, 1e-12);
+        CHECK_EQ(wsg_axis_config_set(&cfg, WSG_AXIS_FORCE_LIMIT, 30, NULL), 0);
+        CHECK_NEAR(cfg.default_force, 30.0, 1e-12);
+        CHECK_EQ(wsg_axis_config_set(&cfg, WSG_AXIS_CLAMP_TRAVEL, 3, NULL), 0);
+        CHECK_NEAR(cfg.clamp_travel, 3.0, 1e-12);
+        CHECK_EQ(wsg_axis_config_set(&cfg, WSG_AXIS_WIDTH_TOLERANCE, 4, NULL),
+                 0);
+        CHECK_NEAR(cfg.width_tolerance, 4.0, 1e-12);
+        /* A session clamps into the same ranges; overdrive raises the
+         * force limit's to the overdrive force. */
+        wsg_axis_init(&ax, &cfg, NULL, NULL);
+        CHECK_NEAR(ax.acc, 200.0, 1e-12);
+        CHECK_NEAR(ax.force_limit, 30.0, 1e-12);
+        wsg_axis_set_acc(&ax, 1e9);
+        CHECK_NEAR(ax.acc, 5000.0, 1e-12);
+        wsg_axis_set_acc(&ax, 0.0);
+        CHECK_NEAR(ax.acc, 100.0, 1e-12);
+        wsg_axis_set_force_limit(&ax, 1e9);
+        CHECK_NEAR(ax.force_limit, 50.0, 1e-12);
+        wsg_axis_set_overdrive(&ax, 1);
+        wsg_axis_set_force_limit(&ax, 1e9);
+        CHECK_NEAR(ax.force_limit, 75.0, 1e-12);
+        wsg_axis_set_force_limit(&ax, 0.0);
+        CHECK_NEAR(ax.force_limit, 5.0, 1e-12);
+    }
+}
+
 int main(void)
 {
+    test_config_ranges();
     test_durations();
     test_motion_values();
     test_homing_time();

@@ -186,6 +186,31 @@ struct wsg_axis {
  * "wsg25". Returns 0 or -EINVAL for an unknown name. */
 int wsg_axis_config_init(struct wsg_axis_config *cfg, const char *model);
 
+/* The values whose valid range depends on the model: the defaults the web
+ * page sets, and a width between the fingers (a part's, a target's). The
+ * model knows its ranges, so whoever takes such a value (the daemon's
+ * options, the session commands, the control channel) asks it here. */
+enum wsg_axis_setting {
+    WSG_AXIS_ACCELERATION,    /* default_acc, mm/s^2: min_acc..max_acc */
+    WSG_AXIS_FORCE_LIMIT,     /* default_force, N: min_force..nom_force */
+    WSG_AXIS_CLAMP_TRAVEL,    /* clamp_travel, mm: 0..stroke */
+    WSG_AXIS_WIDTH_TOLERANCE, /* width_tolerance, mm: 0..stroke */
+    WSG_AXIS_WIDTH            /* a width, mm: 0..stroke (no config value) */
+};
+
+struct wsg_axis_range {
+    double min, max;
+};
+
+/* The valid range of setting s for cfg's model. */
+struct wsg_axis_range wsg_axis_config_range(const struct wsg_axis_config *cfg,
+                                            enum wsg_axis_setting s);
+/* Check v against that range and make it cfg's value (WSG_AXIS_WIDTH is
+ * only checked). Returns 0, or -ERANGE (NaN too) with cfg unchanged; the
+ * range goes to valid unless it is NULL. */
+int wsg_axis_config_set(struct wsg_axis_config *cfg, enum wsg_axis_setting s,
+                        double v, struct wsg_axis_range *valid);
+
 void wsg_axis_init(struct wsg_axis *ax, const struct wsg_axis_config *cfg,
                    wsg_axis_done_fn on_done, void *ctx);
 /* Power cycle: session settings back to defaults, not referenced. */

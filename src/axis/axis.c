@@ -14,6 +14,10 @@
  * (FAST STOP, acknowledge, stop, new motion), and wsg_axis_step settles and
  * then advances the physics. The dispatcher settles after every command, so
  * the next answer already reflects it.
+ *
+ * The ranges of the values a model takes (wsg_axis_config_range) live here
+ * once: the session commands clamp into them, and the daemon's options
+ * check their settings against them.
  */
 #include <errno.h>
 #include <math.h>
@@ -90,6 +94,66 @@ int wsg_axis_config_init(struct wsg_axis_config *cfg, const char *model)
     cfg->temp_fault = 75.0;
     cfg->heat_tau = 60.0;
     return 0;
+}
+
+struct wsg_axis_range wsg_axis_config_range(const struct wsg_axis_config *cfg,
+                                            enum wsg_axis_setting s)
+{
+    struct wsg_axis_range r = {0.0, cfg->stroke};
+
+    switch (s) {
+    case WSG_AXIS_ACCELERATION:
+        r.min = cfg->min_acc;
+        r.max = cfg->max_acc;
+        break;
+    case WSG_AXIS_FORCE_LIMIT:
+        r.min = cfg->min_force;
+        r.max = cfg->nom_force; /* overdrive is a session's, not a default */
+        break;
+    case WSG_AXIS_CLAMP_TRAVEL:
+    case WSG_AXIS_WIDTH_TOLERANCE:
+    case WSG_AXIS_WIDTH:
+        break;
+    }
+    return r;
+}
+
+int wsg_axis_config_set(struct wsg_axis_config *cfg, enum wsg_axis_setting s,
+                        double v, struct wsg_axis_range *valid)
+{
+    struct wsg_axis_range r = wsg_axis_config_range(cfg, s);
+
+    if (valid)
+        *valid = r;
+    /* An error, not a clamp: a value the gripper would not take is a
+     * mistake in the setup. Written so that NaN fails too. */
+    if (!(v >= r.min && v <= r.max))
+        return -ERANGE;
+    switch (s) {
+    case WSG_AXIS_ACCELERATION:
+        cfg->default_acc = v;
+        break;
+    case WSG_AXIS_FORCE_LIMIT:
+        cfg->default_force = v;
+        break;
+    case WSG_AXIS_CLAMP_TRAVEL:
+        cfg->clamp_travel = v;
+        break;
+    case WSG_AXIS_WIDTH_TOLERANCE:
+        cfg->width_tolerance = v;
+        break;
+    case WSG_AXIS_WIDTH:
+        break;
+    }
+    return 0;
+}
+
+/* A width clamped into the stroke, as motion commands take widths. */
+static double wsg_axis_clamp_width(const struct wsg_axis *ax, double width)
+{
+    struct wsg_axis_range r = wsg_axis_config_range(&ax->cfg, WSG_AXIS_WIDTH);
+
+    return wsg_clamp(width, r.min, r.max);
 }
 
 static void wsg_profile_init(struct wsg_profile *pr, double from, double to,
@@ -805,7 +869,7 @@ uint16_t wsg_axis_request_move(struct wsg_axis *ax, uint8_t flags,
         return WSG_E_INVALID_PARAMETER;
     if (flags & WSG_MOVE_RELATIVE)
         width += ax->width;
-    width = wsg_clamp(width, 0.0, ax->cfg.stroke);
+    width = wsg_axis_clamp_width(ax, width);
     if (wsg_axis_outside_soft_limits(ax, width))
         return WSG_E_RANGE_ERROR;
     speed = wsg_clamp(speed, ax->cfg.min_speed, ax->cfg.max_speed);
@@ -823,7 +887,7 @@ uint16_t wsg_axis_request_grasp(struct wsg_axis *ax, double width,
 
     if (isnan(width) || isnan(speed))
         return WSG_E_INVALID_PARAMETER;
-    width = wsg_clamp(width, 0.0, ax->cfg.stroke);
+    width = wsg_axis_clamp_width(ax, width);
     if (wsg_axis_outside_soft_limits(ax, width))
         return WSG_E_RANGE_ERROR;
     speed = wsg_clamp(speed, ax->cfg.min_speed, ax->cfg.max_speed);
@@ -831,7 +895,7 @@ uint16_t wsg_axis_request_grasp(struct wsg_axis *ax, double width,
      * them, in both cases through the clamping travel beyond it. */
     target = width <= ax->width ? width - ax->cfg.clamp_travel
                                 : width + ax->cfg.clamp_travel;
-    target = wsg_clamp(target, 0.0, ax->cfg.stroke);
+    target = wsg_axis_clamp_width(ax, target);
     st = wsg_axis_request(ax, WSG_MOTION_GRASP, WSG_CMD_GRASP, target, speed,
                           tag);
     ax->req_motion.nominal = width;
@@ -843,7 +907,7 @@ uint16_t wsg_axis_request_release(struct wsg_axis *ax, double width,
 {
     if (isnan(width) || isnan(speed))
         return WSG_E_INVALID_PARAMETER;
-    width = wsg_clamp(width, 0.0, ax->cfg.stroke);
+    width = wsg_axis_clamp_width(ax, width);
     if (wsg_axis_outside_soft_limits(ax, width))
         return WSG_E_RANGE_ERROR;
     speed = wsg_clamp(speed, ax->cfg.min_speed, ax->cfg.max_speed);
@@ -880,18 +944,25 @@ void wsg_axis_request_ack(struct wsg_axis *ax)
 
 void wsg_axis_set_acc(struct wsg_axis *ax, double acc)
 {
+    struct wsg_axis_range r =
+        wsg_axis_config_range(&ax->cfg, WSG_AXIS_ACCELERATION);
+
     if (isnan(acc))
         return;
-    ax->acc = wsg_clamp(acc, ax->cfg.min_acc, ax->cfg.max_acc);
+    ax->acc = wsg_clamp(acc, r.min, r.max);
 }
 
 void wsg_axis_set_force_limit(struct wsg_axis *ax, double force)
 {
-    double max = ax->overdrive ? ax->cfg.ovr_force : ax->cfg.nom_force;
+    struct wsg_axis_range r =
+        wsg_axis_config_range(&ax->cfg, WSG_AXIS_FORCE_LIMIT);
 
     if (isnan(force))
         return;
-    ax->force_limit = wsg_clamp(force, ax->cfg.min_force, max);
+    /* Overdrive lets a session go past nominal (3.3.8). */
+    if (ax->overdrive)
+        r.max = ax->cfg.ovr_force;
+    ax->force_limit = wsg_clamp(force, r.min, r.max);
 }
 
 void wsg_axis_set_overdrive(struct wsg_axis *ax, int on)

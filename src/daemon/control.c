@@ -155,6 +155,7 @@ static void format_time(char *buf, size_t len, uint64_t us)
 static void cmd_part(struct wsg_ctl_client *c, int argc, char **argv)
 {
     struct wsg_axis *ax = &c->ctl->cur->dev.axis;
+    struct wsg_axis_range r = wsg_axis_config_range(&ax->cfg, WSG_AXIS_WIDTH);
     double width, stiffness = 0.0;
 
     if (argc == 2 && strcmp(argv[1], "none") == 0) {
@@ -166,9 +167,9 @@ static void cmd_part(struct wsg_ctl_client *c, int argc, char **argv)
         reply(c, "error usage: part WIDTH [STIFFNESS] | part none");
         return;
     }
-    if (!parse_num(argv[1], &width) || width < 0.0 || width > ax->cfg.stroke) {
-        reply(c, "error part: WIDTH must be a number of mm in 0..%g",
-              ax->cfg.stroke);
+    if (!parse_num(argv[1], &width) || width < r.min || width > r.max) {
+        reply(c, "error part: WIDTH must be a number of mm in %g..%g", r.min,
+              r.max);
         return;
     }
     if (argc == 3 && (!parse_num(argv[2], &stiffness) || stiffness <= 0.0)) {
@@ -182,6 +183,7 @@ static void cmd_part(struct wsg_ctl_client *c, int argc, char **argv)
 static void cmd_obstacle(struct wsg_ctl_client *c, int argc, char **argv)
 {
     struct wsg_axis *ax = &c->ctl->cur->dev.axis;
+    struct wsg_axis_range r = wsg_axis_config_range(&ax->cfg, WSG_AXIS_WIDTH);
     double width;
 
     if (argc != 2) {
@@ -193,9 +195,9 @@ static void cmd_obstacle(struct wsg_ctl_client *c, int argc, char **argv)
         reply(c, "ok obstacle none");
         return;
     }
-    if (!parse_num(argv[1], &width) || width < 0.0 || width > ax->cfg.stroke) {
-        reply(c, "error obstacle: WIDTH must be a number of mm in 0..%g",
-              ax->cfg.stroke);
+    if (!parse_num(argv[1], &width) || width < r.min || width > r.max) {
+        reply(c, "error obstacle: WIDTH must be a number of mm in %g..%g",
+              r.min, r.max);
         return;
     }
     wsg_axis_set_obstacle(ax, width);

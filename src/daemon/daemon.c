@@ -144,8 +144,8 @@ static int open_gripper(struct wsg_daemon *d, struct wsg_gripper *g,
         memcpy(g->dev.tag, o.device_tag, g->dev.tag_len);
         g->dev.tag[g->dev.tag_len] = '\0';
     }
-    if (o.initial_part >= 0)
-        wsg_axis_set_part(&g->dev.axis, o.initial_part,
+    if (o.initial_part.given)
+        wsg_axis_set_part(&g->dev.axis, o.initial_part.value,
                           o.initial_part_stiffness);
     if (d->log.f)
         wsg_log_attach(&d->log, &g->tap, &g->dev,

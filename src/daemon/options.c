@@ -1,9 +1,14 @@
 /*
- * Command line parsing for wsgemu. Every option is validated here, before
- * anything is opened, so a typo ends the program with status 2 and one clear
- * line instead of a half-started emulator. Values land in struct
- * wsg_options; the model's configuration is resolved here too, because an
- * unknown model name is a usage error like any other.
+ * Command line and config file parsing for wsgemu, driven by one table of
+ * settings (settings[], below): getopt_long's table, the config file's
+ * keys, the defaults and --help are all made from it, so an option is
+ * added in one row. Every option is validated here, before anything is
+ * opened, so a typo ends the program with status 2 and one clear line
+ * instead of a half-started emulator. Values land in struct wsg_options;
+ * the model's configuration is resolved here too, because an unknown model
+ * name is a usage error like any other, and the settings whose range
+ * depends on the model are checked against the model's own ranges
+ * (wsg_axis_config_set) once it is known.
  */
 #define _GNU_SOURCE
 
@@ -21,173 +26,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-
-enum {
-    OPT_TCP = 256,
-    OPT_UDP,
-    OPT_PTY,
-    OPT_CAN,
-    OPT_NO_CRC,
-    OPT_CRC,
-    OPT_NO_DISCONNECT_FAST_STOP,
-    OPT_DISCONNECT_FAST_STOP,
-    OPT_STEP_US,
-    OPT_MODEL,
-    OPT_ACCELERATION,
-    OPT_FORCE_LIMIT,
-    OPT_HOMING_DIRECTION,
-    OPT_CLAMPING_TRAVEL,
-    OPT_WIDTH_TOLERANCE,
-    OPT_SERIAL,
-    OPT_TAG,
-    OPT_PART,
-    OPT_TIME_SCALE,
-    OPT_CONTROL,
-    OPT_LOG,
-    OPT_CONFIG,
-    OPT_MAX_CLIENTS,
-    OPT_GRIPPERS,
-    OPT_FORCE_SENSOR,
-    OPT_LATENCY
-};
-
-/* The config file's keys are these names too (without the dashes). */
-static const struct option long_options[] = {
-    {"tcp", required_argument, NULL, OPT_TCP},
-    {"max-clients", required_argument, NULL, OPT_MAX_CLIENTS},
-    {"udp", required_argument, NULL, OPT_UDP},
-    {"pty", required_argument, NULL, OPT_PTY},
-    {"can", required_argument, NULL, OPT_CAN},
-    {"no-crc", no_argument, NULL, OPT_NO_CRC},
-    {"crc", required_argument, NULL, OPT_CRC},
-    {"no-disconnect-fast-stop", no_argument, NULL,
-     OPT_NO_DISCONNECT_FAST_STOP},
-    {"disconnect-fast-stop", required_argument, NULL,
-     OPT_DISCONNECT_FAST_STOP},
-    {"step-us", required_argument, NULL, OPT_STEP_US},
-    {"model", required_argument, NULL, OPT_MODEL},
-    {"acceleration", required_argument, NULL, OPT_ACCELERATION},
-    {"force-limit", required_argument, NULL, OPT_FORCE_LIMIT},
-    {"homing-direction", required_argument, NULL, OPT_HOMING_DIRECTION},
-    {"clamping-travel", required_argument, NULL, OPT_CLAMPING_TRAVEL},
-    {"width-tolerance", required_argument, NULL, OPT_WIDTH_TOLERANCE},
-    {"serial", required_argument, NULL, OPT_SERIAL},
-    {"tag", required_argument, NULL, OPT_TAG},
-    {"part", required_argument, NULL, OPT_PART},
-    {"time-scale", required_argument, NULL, OPT_TIME_SCALE},
-    {"latency", required_argument, NULL, OPT_LATENCY},
-    {"control", required_argument, NULL, OPT_CONTROL},
-    {"log", required_argument, NULL, OPT_LOG},
-    {"config", required_argument, NULL, OPT_CONFIG},
-    {"grippers", required_argument, NULL, OPT_GRIPPERS},
-    {"force-sensor", required_argument, NULL, OPT_FORCE_SENSOR},
-    {"help", no_argument, NULL, 'h'},
-    {"version", no_argument, NULL, 'V'},
-    {NULL, 0, NULL, 0}};
-
-static void usage(FILE *f)
-{
-    fprintf(
-        f,
-        "Usage: wsgemu [OPTION]...\n"
-        "Emulate a Weiss WSG 50 gripper on its host interfaces.\n"
-        "\n"
-        "Interfaces (with none of these: TCP and UDP on their defaults):\n"
-        "  --tcp [ADDR:]PORT          listen for TCP clients on an IPv4\n"
-        "                             address (default 127.0.0.1:1000;\n"
-        "                             port 0 picks a free port)\n"
-        "  --udp [ADDR:]PORT[:REMOTE] receive datagrams on PORT, answer\n"
-        "                             to the sender's address at port\n"
-        "                             REMOTE (default 127.0.0.1:1500:1501)\n"
-        "  --pty PATH                 serial port: a pseudo-terminal\n"
-        "                             whose slave PATH links to\n"
-        "  --can IFACE[:ID]           SocketCAN interface; commands on\n"
-        "                             the 11-bit ID (default 0x000),\n"
-        "                             answers on ID+1\n"
-        "  --max-clients N            TCP connections served at once\n"
-        "                             (1..%u, default %u); a further one\n"
-        "                             is accepted and closed at once\n"
-        "  --control [ADDR:]PORT      control channel (TCP, default\n"
-        "                             address 127.0.0.1)\n"
-        "\n"
-        "Gripper (what its web page sets):\n"
-        "  --model NAME               wsg50 (default), wsg50-210, wsg32,\n"
-        "                             wsg25\n"
-        "  --acceleration MM_S2       default acceleration (default 150,\n"
-        "                             within the model's limits)\n"
-        "  --force-limit N            default grasping force limit\n"
-        "                             (default half the nominal force;\n"
-        "                             minimum..nominal force)\n"
-        "  --homing-direction DIR     positive (default) or negative\n"
-        "  --clamping-travel MM       grasp clamping travel (default 10;\n"
-        "                             0..stroke)\n"
-        "  --width-tolerance MM       part width tolerance (default 10;\n"
-        "                             0..stroke)\n"
-        "  --crc on|off, --no-crc     check the checksums of received\n"
-        "                             packets (default on)\n"
-        "  --disconnect-fast-stop on|off, --no-disconnect-fast-stop\n"
-        "                             FAST STOP when a TCP client closes\n"
-        "                             without a Disconnect Announcement\n"
-        "                             (07h) (default on)\n"
-        "  --force-sensor on|off      force measurement fingers fitted:\n"
-        "                             Tare (38h) works, 40h shows\n"
-        "                             SF_FORCECNTL_MODE while grasping\n"
-        "                             and holding (default off)\n"
-        "  --serial N                 serial number (0..4294967295,\n"
-        "                             default 1)\n"
-        "  --tag TEXT                 device tag: 1..64 printable ASCII\n"
-        "                             characters (default none)\n"
-        "  --part WIDTH[:STIFFNESS]   a part of WIDTH mm (0..stroke)\n"
-        "                             between the fingers at start,\n"
-        "                             STIFFNESS N/mm (default 50)\n"
-        "\n",
-        WSG_MAX_CLIENTS_MAX, WSG_MAX_CLIENTS_DEFAULT);
-    /* In two parts: C99 guarantees string literals of 4095 bytes only. */
-    fprintf(
-        f,
-        "Emulator:\n"
-        "  --step-us US               model step in microseconds\n"
-        "                             (%u..%u, default %u)\n"
-        "  --time-scale X             simulated seconds per real second\n"
-        "                             (0.001..1000, default 1)\n"
-        "  --latency MS[:JITTER]      every packet the gripper sends\n"
-        "                             leaves MS ms of simulated time late,\n"
-        "                             plus 0..JITTER ms drawn from a fixed\n"
-        "                             seed, in order (0..%u each; default\n"
-        "                             0: at once)\n"
-        "  --log FILE                 communication log: one line per\n"
-        "                             packet; '-' for stderr\n"
-        "  --config FILE              read settings from FILE first; the\n"
-        "                             command line overrides them\n"
-        "  --grippers N               N independent grippers in one\n"
-        "                             process (1..%u, default 1); each\n"
-        "                             gets its own interfaces, counted up\n"
-        "                             from the ones given (see README)\n"
-        "  -h, --help                 show this help and exit\n"
-        "  -V, --version              show the version and exit\n"
-        "\n"
-        "Config file: one 'key = value' per line, the keys the long option\n"
-        "names without dashes, the values as on the command line; blank\n"
-        "lines and lines starting with '#' are ignored; spaces around key\n"
-        "and value are dropped. no-crc and no-disconnect-fast-stop take\n"
-        "on|off (also true|false, yes|no, 1|0), like crc,\n"
-        "disconnect-fast-stop and force-sensor. Example:\n"
-        "  # cell 4\n"
-        "  model = wsg50-210\n"
-        "  tcp = 127.0.0.1:1000\n"
-        "  acceleration = 200\n"
-        "  tag = cell 4\n"
-        "Errors name the file and line; bad settings exit with status 2.\n"
-        "\n"
-        "When every interface is open, one line is printed on stdout:\n"
-        "  ready tcp=ADDR:PORT udp=ADDR:PORT>REMOTE pty=PATH can=IFACE:ID\n"
-        "        control=ADDR:PORT\n"
-        "(the fields of the open interfaces only; with --grippers N each\n"
-        "gripper field lists N values, comma-separated, in gripper order).\n"
-        "SIGINT or SIGTERM stops the emulator with exit status 0.\n",
-        WSG_STEP_US_MIN, WSG_STEP_US_MAX, WSG_STEP_US_DEFAULT,
-        WSG_DELAY_MS_MAX, WSG_GRIPPERS_MAX);
-}
 
 /* Decimal digits only: strtoul would also take signs, spaces and hex. */
 static int parse_uint(const char *s, unsigned long max, unsigned long *out)
@@ -294,15 +132,16 @@ static int parse_dec_hex(const char *s, unsigned long max, unsigned long *out)
     return 0;
 }
 
-/* IFACE[:ID], ID decimal or 0x-prefixed hex, 0..0x7FE. */
-static int parse_can(char *arg, const char **iface, uint16_t *id)
+/* IFACE[:ID], ID decimal or 0x-prefixed hex, 0..max. */
+static int parse_can(char *arg, unsigned long max, const char **iface,
+                     uint16_t *id)
 {
     char *colon = strrchr(arg, ':');
     unsigned long v;
 
     if (colon) {
         *colon = '\0';
-        if (parse_dec_hex(colon + 1, WSG_CAN_ID_MAX, &v) < 0)
+        if (parse_dec_hex(colon + 1, max, &v) < 0)
             return -EINVAL;
         *id = (uint16_t)v;
     }
@@ -369,305 +208,655 @@ static const char *keep(struct wsg_options *o, const char *val, int from_file)
     return p;
 }
 
-/* Apply one setting. val is the option's argument, or for a flag option
- * (no-crc) NULL on the command line and an on|off value in a file. On
- * error, err gets the reason (without the option's name) and -1 is
- * returned. line is 0 for the command line. */
-static int set_option(struct wsg_options *o, int id, const char *val,
-                      unsigned line, char *err, size_t errcap)
+/* The field of o that WSG_AT(field) names. */
+static void *field(struct wsg_options *o, size_t at)
 {
-    int from_file = line > 0;
-    unsigned long v;
-    double d;
-    int b = 1;
+    return (char *)o + at - 1;
+}
 
-    switch (id) {
-    case OPT_NO_CRC:
-    case OPT_NO_DISCONNECT_FAST_STOP:
-        /* "no-crc = on" in a file means what --no-crc means. */
-        if (val && parse_bool(val, &b) < 0)
-            goto bad_bool;
-        if (id == OPT_NO_CRC)
-            o->check_crc = !b;
-        else
-            o->disconnect_fast_stop = !b;
-        return 0;
-    case OPT_CRC:
-    case OPT_DISCONNECT_FAST_STOP:
-    case OPT_FORCE_SENSOR:
-        if (parse_bool(val, &b) < 0)
-            goto bad_bool;
-        if (id == OPT_CRC)
-            o->check_crc = b;
-        else if (id == OPT_FORCE_SENSOR)
-            o->force_sensor = b;
-        else
-            o->disconnect_fast_stop = b;
-        return 0;
-    default:
-        break;
-    }
-    switch (id) {
-    case OPT_TCP:
-        if (parse_endpoint(val, &o->tcp) < 0) {
-            snprintf(err, errcap,
-                     "'%s' is not [ADDR:]PORT with an IPv4 ADDR and a PORT "
-                     "of 0..65535",
-                     val);
-            return -1;
-        }
-        o->tcp_enabled = 1;
-        break;
-    case OPT_CONTROL:
-        if (parse_endpoint(val, &o->control) < 0) {
-            snprintf(err, errcap,
-                     "'%s' is not [ADDR:]PORT with an IPv4 ADDR and a PORT "
-                     "of 0..65535",
-                     val);
-            return -1;
-        }
-        o->control_enabled = 1;
-        break;
-    case OPT_UDP:
-        if (parse_udp(val, &o->udp, &o->udp_remote_port) < 0) {
-            snprintf(err, errcap,
-                     "'%s' is not [ADDR:]PORT[:REMOTE] with an IPv4 ADDR, a "
-                     "PORT of 0..65535 and a REMOTE port of 1..65535",
-                     val);
-            return -1;
-        }
-        o->udp_enabled = 1;
-        break;
-    case OPT_PTY:
-    case OPT_LOG:
-    case OPT_MODEL: {
-        const char *k;
-
-        if (val[0] == '\0') {
-            snprintf(err, errcap, "an empty value");
-            return -1;
-        }
-        k = keep(o, val, from_file);
-        if (!k)
-            goto full;
-        if (id == OPT_PTY)
-            o->pty_path = k;
-        else if (id == OPT_LOG)
-            o->log_path = k;
-        else
-            o->model = k;
-        break;
-    }
-    case OPT_CAN: {
-        /* parse_can cuts its argument at the ID: keep it (a file's
-         * value) first, and report the whole text. */
-        char *k = (char *)keep(o, val, from_file);
-        char shown[64];
-
-        if (!k)
-            goto full;
-        snprintf(shown, sizeof shown, "%s", val);
-        if (parse_can(k, &o->can_iface, &o->can_id) < 0) {
-            snprintf(err, errcap,
-                     "'%s' is not IFACE[:ID] with an interface name and an "
-                     "11-bit ID of 0..0x7FE",
-                     shown);
-            return -1;
-        }
-        break;
-    }
-    case OPT_GRIPPERS:
-        if (parse_uint(val, WSG_GRIPPERS_MAX, &v) < 0 || v < 1) {
-            snprintf(err, errcap, "'%s' is not a number in 1..%u", val,
-                     WSG_GRIPPERS_MAX);
-            return -1;
-        }
-        o->grippers = (unsigned)v;
-        break;
-    case OPT_MAX_CLIENTS:
-        if (parse_uint(val, WSG_MAX_CLIENTS_MAX, &v) < 0 || v < 1) {
-            snprintf(err, errcap, "'%s' is not a number in 1..%u", val,
-                     WSG_MAX_CLIENTS_MAX);
-            return -1;
-        }
-        o->max_clients = (unsigned)v;
-        break;
-    case OPT_STEP_US:
-        if (parse_uint(val, WSG_STEP_US_MAX, &v) < 0 || v < WSG_STEP_US_MIN) {
-            snprintf(err, errcap,
-                     "'%s' is not a number of microseconds in %u..%u", val,
-                     WSG_STEP_US_MIN, WSG_STEP_US_MAX);
-            return -1;
-        }
-        o->step_us = (uint32_t)v;
-        break;
-    case OPT_ACCELERATION:
-    case OPT_FORCE_LIMIT:
-    case OPT_CLAMPING_TRAVEL:
-    case OPT_WIDTH_TOLERANCE:
-        /* The range depends on the model, which may come later: checked
-         * in finish(). */
-        if (parse_double(val, &d) < 0 || d < 0) {
-            snprintf(err, errcap, "'%s' is not a non-negative number", val);
-            return -1;
-        }
-        if (id == OPT_ACCELERATION) {
-            o->acceleration = d;
-            o->line_acceleration = line;
-        } else if (id == OPT_FORCE_LIMIT) {
-            o->force_limit = d;
-            o->line_force_limit = line;
-        } else if (id == OPT_CLAMPING_TRAVEL) {
-            o->clamp_travel = d;
-            o->line_clamp_travel = line;
-        } else {
-            o->width_tolerance = d;
-            o->line_width_tolerance = line;
-        }
-        break;
-    case OPT_HOMING_DIRECTION:
-        if (strcmp(val, "positive") == 0)
-            o->homing_dir = WSG_HOME_POSITIVE;
-        else if (strcmp(val, "negative") == 0)
-            o->homing_dir = WSG_HOME_NEGATIVE;
-        else {
-            snprintf(err, errcap, "'%s' is not positive or negative", val);
-            return -1;
-        }
-        break;
-    case OPT_SERIAL:
-        if (parse_uint(val, 0xFFFFFFFFul, &v) < 0) {
-            snprintf(err, errcap, "'%s' is not a number in 0..4294967295",
-                     val);
-            return -1;
-        }
-        o->serial = (uint32_t)v;
-        break;
-    case OPT_TAG: {
-        size_t n = strlen(val), i;
-        const char *k;
-
-        /* What Set Device Tag (51h) would accept. */
-        for (i = 0; i < n; i++)
-            if (val[i] < 0x20 || val[i] > 0x7E)
-                break;
-        if (n == 0 || n > WSG_TAG_MAX || i < n) {
-            snprintf(err, errcap,
-                     "'%s' is not 1..%u printable ASCII characters", val,
-                     WSG_TAG_MAX);
-            return -1;
-        }
-        k = keep(o, val, from_file);
-        if (!k)
-            goto full;
-        o->device_tag = k;
-        break;
-    }
-    case OPT_PART: {
-        char buf[64];
-        char *colon;
-        double w, st = 0.0;
-
-        if (strlen(val) >= sizeof buf)
-            goto bad_part;
-        strcpy(buf, val);
-        colon = strchr(buf, ':');
-        if (colon) {
-            *colon = '\0';
-            if (parse_double(colon + 1, &st) < 0 || !(st > 0))
-                goto bad_part;
-        }
-        if (parse_double(buf, &w) < 0 || w < 0)
-            goto bad_part;
-        o->initial_part = w;
-        o->initial_part_stiffness = st;
-        o->line_part = line;
-        break;
-    bad_part:
-        snprintf(err, errcap,
-                 "'%s' is not WIDTH[:STIFFNESS] with a WIDTH in mm >= 0 and "
-                 "a STIFFNESS in N/mm > 0",
-                 val);
-        return -1;
-    }
-    case OPT_LATENCY: {
-        const char *colon = strchr(val, ':');
-        unsigned long ms, jitter = 0;
-        char buf[16];
-        size_t n = colon ? (size_t)(colon - val) : strlen(val);
-
-        /* Whole milliseconds, decimal digits only: the delay runs on the
-         * model's step grid, and a fraction would only look precise. */
-        if (n >= sizeof buf)
-            goto bad_latency;
-        memcpy(buf, val, n);
-        buf[n] = '\0';
-        if (parse_uint(buf, WSG_DELAY_MS_MAX, &ms) < 0 ||
-            (colon && parse_uint(colon + 1, WSG_DELAY_MS_MAX, &jitter) < 0))
-            goto bad_latency;
-        o->latency_ms = (uint32_t)ms;
-        o->latency_jitter_ms = (uint32_t)jitter;
-        break;
-    bad_latency:
-        snprintf(err, errcap,
-                 "'%s' is not MS[:JITTER] with MS and JITTER whole "
-                 "milliseconds in 0..%u",
-                 val, WSG_DELAY_MS_MAX);
-        return -1;
-    }
-    case OPT_TIME_SCALE:
-        if (parse_double(val, &d) < 0 || d < WSG_SCHED_SCALE_MIN ||
-            d > WSG_SCHED_SCALE_MAX) {
-            snprintf(err, errcap, "'%s' is not a number in %g..%g", val,
-                     WSG_SCHED_SCALE_MIN, WSG_SCHED_SCALE_MAX);
-            return -1;
-        }
-        o->time_scale = d;
-        break;
-    default:
-        snprintf(err, errcap, "not a setting");
-        return -1;
-    }
-    return 0;
-bad_bool:
-    snprintf(err, errcap, "'%s' is not on or off", val);
-    return -1;
-full:
+static int too_much_text(char *err, size_t errcap)
+{
     snprintf(err, errcap,
              "too much text in the config file (%u bytes "
              "of values at most)",
              WSG_OPTIONS_STRBUF);
-    return -1;
+    return -EINVAL;
+}
+
+/* "min..max" as --help and the messages show it: whole numbers in full
+ * (4294967295, where %g would write 4.29497e+09), others as %g does. */
+static const char *range_text(const struct wsg_setting *s, char *buf,
+                              size_t cap)
+{
+    const double ends[2] = {s->min, s->max};
+    char end[2][24];
+    int i;
+
+    for (i = 0; i < 2; i++)
+        snprintf(end[i], sizeof end[i],
+                 ends[i] == floor(ends[i]) && fabs(ends[i]) < 1e15 ? "%.0f"
+                                                                   : "%g",
+                 ends[i]);
+    snprintf(buf, cap, "%s..%s", end[0], end[1]);
+    return buf;
+}
+
+static void model_value_set(struct wsg_model_value *m, double v, unsigned line)
+{
+    m->given = 1;
+    m->value = v;
+    m->line = line;
+}
+
+/* The parsers of composite values (wsg_setting_parse_fn). */
+
+/* --tcp, --control [ADDR:]PORT: without ADDR, the address before it stays
+ * (the default's, or the config file's). */
+static int set_endpoint(struct wsg_options *o, const struct wsg_setting *s,
+                        const char *val, unsigned line, char *err,
+                        size_t errcap)
+{
+    (void)line;
+    if (parse_endpoint(val, field(o, s->at)) == 0)
+        return 0;
+    snprintf(err, errcap,
+             "'%s' is not [ADDR:]PORT with an IPv4 ADDR and a PORT "
+             "of 0..65535",
+             val);
+    return -EINVAL;
+}
+
+static int set_udp(struct wsg_options *o, const struct wsg_setting *s,
+                   const char *val, unsigned line, char *err, size_t errcap)
+{
+    (void)line;
+    if (parse_udp(val, field(o, s->at), &o->udp_remote_port) == 0)
+        return 0;
+    snprintf(err, errcap,
+             "'%s' is not [ADDR:]PORT[:REMOTE] with an IPv4 ADDR, a "
+             "PORT of 0..65535 and a REMOTE port of 1..65535",
+             val);
+    return -EINVAL;
+}
+
+static int set_can(struct wsg_options *o, const struct wsg_setting *s,
+                   const char *val, unsigned line, char *err, size_t errcap)
+{
+    /* parse_can cuts its argument at the ID: keep it (a file's value)
+     * first, and report the whole text. */
+    char *k = (char *)keep(o, val, line > 0);
+    char shown[64];
+
+    if (!k)
+        return too_much_text(err, errcap);
+    snprintf(shown, sizeof shown, "%s", val);
+    if (parse_can(k, (unsigned long)s->max, &o->can_iface, &o->can_id) == 0)
+        return 0;
+    snprintf(err, errcap,
+             "'%s' is not IFACE[:ID] with an interface name and an "
+             "11-bit ID of %lu..0x%lX",
+             shown, (unsigned long)s->min, (unsigned long)s->max);
+    return -EINVAL;
+}
+
+static int set_homing(struct wsg_options *o, const struct wsg_setting *s,
+                      const char *val, unsigned line, char *err, size_t errcap)
+{
+    int *dir = field(o, s->at);
+
+    (void)line;
+    if (strcmp(val, "positive") == 0)
+        *dir = WSG_HOME_POSITIVE;
+    else if (strcmp(val, "negative") == 0)
+        *dir = WSG_HOME_NEGATIVE;
+    else {
+        snprintf(err, errcap, "'%s' is not positive or negative", val);
+        return -EINVAL;
+    }
+    return 0;
+}
+
+/* What Set Device Tag (51h) would accept: min..max printable characters. */
+static int set_tag(struct wsg_options *o, const struct wsg_setting *s,
+                   const char *val, unsigned line, char *err, size_t errcap)
+{
+    size_t n = strlen(val), i;
+    const char *k;
+    char r[64];
+
+    for (i = 0; i < n; i++)
+        if (val[i] < 0x20 || val[i] > 0x7E)
+            break;
+    if (n < s->min || n > s->max || i < n) {
+        snprintf(err, errcap, "'%s' is not %s printable ASCII characters", val,
+                 range_text(s, r, sizeof r));
+        return -EINVAL;
+    }
+    k = keep(o, val, line > 0);
+    if (!k)
+        return too_much_text(err, errcap);
+    *(const char **)field(o, s->at) = k;
+    return 0;
+}
+
+/* WIDTH[:STIFFNESS]: WIDTH is checked against the model later, like any
+ * WSG_SETTING_MODEL value. */
+static int set_part(struct wsg_options *o, const struct wsg_setting *s,
+                    const char *val, unsigned line, char *err, size_t errcap)
+{
+    char buf[64];
+    char *colon;
+    double w, st = 0.0;
+
+    if (strlen(val) >= sizeof buf)
+        goto bad;
+    strcpy(buf, val);
+    colon = strchr(buf, ':');
+    if (colon) {
+        *colon = '\0';
+        if (parse_double(colon + 1, &st) < 0 || !(st > 0))
+            goto bad;
+    }
+    if (parse_double(buf, &w) < 0 || w < 0)
+        goto bad;
+    model_value_set(field(o, s->at), w, line);
+    o->initial_part_stiffness = st;
+    return 0;
+bad:
+    snprintf(err, errcap,
+             "'%s' is not WIDTH[:STIFFNESS] with a WIDTH in mm >= 0 and "
+             "a STIFFNESS in N/mm > 0",
+             val);
+    return -EINVAL;
+}
+
+/* MS[:JITTER], each in min..max. Whole milliseconds, decimal digits only:
+ * the delay runs on the model's step grid, and a fraction would only look
+ * precise. */
+static int set_latency(struct wsg_options *o, const struct wsg_setting *s,
+                       const char *val, unsigned line, char *err,
+                       size_t errcap)
+{
+    const char *colon = strchr(val, ':');
+    unsigned long ms, jitter = 0, max = (unsigned long)s->max;
+    char buf[16], r[64];
+    size_t n = colon ? (size_t)(colon - val) : strlen(val);
+
+    (void)line;
+    if (n < sizeof buf) {
+        memcpy(buf, val, n);
+        buf[n] = '\0';
+        if (parse_uint(buf, max, &ms) == 0 &&
+            (!colon || parse_uint(colon + 1, max, &jitter) == 0) &&
+            ms >= s->min && jitter >= s->min) {
+            o->latency_ms = (uint32_t)ms;
+            o->latency_jitter_ms = (uint32_t)jitter;
+            return 0;
+        }
+    }
+    snprintf(err, errcap,
+             "'%s' is not MS[:JITTER] with MS and JITTER whole "
+             "milliseconds in %s",
+             val, range_text(s, r, sizeof r));
+    return -EINVAL;
+}
+
+/* Every setting, in --help's order. Adding an option is adding a row: the
+ * command line, the config file (unless cli_only), the defaults and
+ * --help follow. The settings checked against the model stand in the order
+ * their errors are looked for. */
+static const struct wsg_setting settings[] = {
+    {.name = "tcp",
+     .type = WSG_SETTING_PARSE,
+     .parse = set_endpoint,
+     .at = WSG_AT(tcp),
+     .given = WSG_AT(tcp_enabled),
+     .def = "127.0.0.1:1000",
+     .section = WSG_SECTION_INTERFACES,
+     .arg = "[ADDR:]PORT",
+     .help = "listen for TCP clients on an IPv4\n"
+             "address (default {default};\n"
+             "port 0 picks a free port)"},
+    {.name = "udp",
+     .type = WSG_SETTING_PARSE,
+     .parse = set_udp,
+     .at = WSG_AT(udp),
+     .given = WSG_AT(udp_enabled),
+     .def = "127.0.0.1:1500:1501",
+     .section = WSG_SECTION_INTERFACES,
+     .arg = "[ADDR:]PORT[:REMOTE]",
+     .help = "receive datagrams on PORT, answer\n"
+             "to the sender's address at port\n"
+             "REMOTE (default {default})"},
+    {.name = "pty",
+     .type = WSG_SETTING_TEXT,
+     .at = WSG_AT(pty_path),
+     .section = WSG_SECTION_INTERFACES,
+     .arg = "PATH",
+     .help = "serial port: a pseudo-terminal\n"
+             "whose slave PATH links to"},
+    {.name = "can",
+     .type = WSG_SETTING_PARSE,
+     .parse = set_can,
+     .min = 0,
+     .max = WSG_CAN_ID_MAX,
+     .section = WSG_SECTION_INTERFACES,
+     .arg = "IFACE[:ID]",
+     .help = "SocketCAN interface; commands on\n"
+             "the 11-bit ID (default 0x000),\n"
+             "answers on ID+1"},
+    /* A real gripper serves a handful; 64 leaves room for test rigs that
+     * open one per process while a connection storm or a port scan still
+     * finds a limit. */
+    {.name = "max-clients",
+     .type = WSG_SETTING_UINT,
+     .at = WSG_AT(max_clients),
+     .min = 1,
+     .max = WSG_MAX_CLIENTS_MAX,
+     .def = "64",
+     .section = WSG_SECTION_INTERFACES,
+     .arg = "N",
+     .help = "TCP connections served at once\n"
+             "({range}, default {default}); a further one\n"
+             "is accepted and closed at once"},
+    {.name = "control",
+     .type = WSG_SETTING_PARSE,
+     .parse = set_endpoint,
+     .at = WSG_AT(control),
+     .given = WSG_AT(control_enabled),
+     .def = "127.0.0.1:0",
+     .section = WSG_SECTION_INTERFACES,
+     .arg = "[ADDR:]PORT",
+     .help = "control channel (TCP, default\n"
+             "address 127.0.0.1)"},
+    {.name = "model",
+     .type = WSG_SETTING_TEXT,
+     .at = WSG_AT(model),
+     .section = WSG_SECTION_GRIPPER,
+     .arg = "NAME",
+     .help = "wsg50 (default), wsg50-210, wsg32,\n"
+             "wsg25"},
+    {.name = "acceleration",
+     .type = WSG_SETTING_MODEL,
+     .at = WSG_AT(acceleration),
+     .quantity = WSG_AXIS_ACCELERATION,
+     .unit = "mm/s^2",
+     .section = WSG_SECTION_GRIPPER,
+     .arg = "MM_S2",
+     .help = "default acceleration (default 150,\n"
+             "within the model's limits)"},
+    {.name = "force-limit",
+     .type = WSG_SETTING_MODEL,
+     .at = WSG_AT(force_limit),
+     .quantity = WSG_AXIS_FORCE_LIMIT,
+     .unit = "N",
+     .section = WSG_SECTION_GRIPPER,
+     .arg = "N",
+     .help = "default grasping force limit\n"
+             "(default half the nominal force;\n"
+             "minimum..nominal force)"},
+    {.name = "homing-direction",
+     .type = WSG_SETTING_PARSE,
+     .parse = set_homing,
+     .at = WSG_AT(homing_dir),
+     .section = WSG_SECTION_GRIPPER,
+     .arg = "DIR",
+     .help = "positive (default) or negative"},
+    {.name = "clamping-travel",
+     .type = WSG_SETTING_MODEL,
+     .at = WSG_AT(clamp_travel),
+     .quantity = WSG_AXIS_CLAMP_TRAVEL,
+     .unit = "mm",
+     .section = WSG_SECTION_GRIPPER,
+     .arg = "MM",
+     .help = "grasp clamping travel (default 10;\n"
+             "0..stroke)"},
+    {.name = "width-tolerance",
+     .type = WSG_SETTING_MODEL,
+     .at = WSG_AT(width_tolerance),
+     .quantity = WSG_AXIS_WIDTH_TOLERANCE,
+     .unit = "mm",
+     .section = WSG_SECTION_GRIPPER,
+     .arg = "MM",
+     .help = "part width tolerance (default 10;\n"
+             "0..stroke)"},
+    {.name = "crc",
+     .type = WSG_SETTING_BOOL,
+     .at = WSG_AT(check_crc),
+     .def = "on",
+     .section = WSG_SECTION_GRIPPER,
+     .arg = "on|off",
+     .help = "check the checksums of received\n"
+             "packets (default {default})"},
+    {.name = "no-crc",
+     .type = WSG_SETTING_NOT,
+     .at = WSG_AT(check_crc),
+     .section = WSG_SECTION_GRIPPER},
+    {.name = "disconnect-fast-stop",
+     .type = WSG_SETTING_BOOL,
+     .at = WSG_AT(disconnect_fast_stop),
+     .def = "on",
+     .section = WSG_SECTION_GRIPPER,
+     .arg = "on|off",
+     .help = "FAST STOP when a TCP client closes\n"
+             "without a Disconnect Announcement\n"
+             "(07h) (default {default})"},
+    {.name = "no-disconnect-fast-stop",
+     .type = WSG_SETTING_NOT,
+     .at = WSG_AT(disconnect_fast_stop),
+     .section = WSG_SECTION_GRIPPER},
+    {.name = "force-sensor",
+     .type = WSG_SETTING_BOOL,
+     .at = WSG_AT(force_sensor),
+     .def = "off",
+     .section = WSG_SECTION_GRIPPER,
+     .arg = "on|off",
+     .help = "force measurement fingers fitted:\n"
+             "Tare (38h) works, 40h shows\n"
+             "SF_FORCECNTL_MODE while grasping\n"
+             "and holding (default {default})"},
+    {.name = "serial",
+     .type = WSG_SETTING_UINT,
+     .at = WSG_AT(serial),
+     .min = 0,
+     .max = 4294967295.0,
+     .def = "1",
+     .section = WSG_SECTION_GRIPPER,
+     .arg = "N",
+     .help = "serial number ({range},\n"
+             "default {default})"},
+    {.name = "tag",
+     .type = WSG_SETTING_PARSE,
+     .parse = set_tag,
+     .at = WSG_AT(device_tag),
+     .min = 1,
+     .max = WSG_TAG_MAX,
+     .section = WSG_SECTION_GRIPPER,
+     .arg = "TEXT",
+     .help = "device tag: {range} printable ASCII\n"
+             "characters (default none)"},
+    {.name = "part",
+     .type = WSG_SETTING_MODEL,
+     .parse = set_part,
+     .at = WSG_AT(initial_part),
+     .quantity = WSG_AXIS_WIDTH,
+     .unit = "mm",
+     .section = WSG_SECTION_GRIPPER,
+     .arg = "WIDTH[:STIFFNESS]",
+     .help = "a part of WIDTH mm (0..stroke)\n"
+             "between the fingers at start,\n"
+             "STIFFNESS N/mm (default 50)"},
+    {.name = "step-us",
+     .type = WSG_SETTING_UINT,
+     .at = WSG_AT(step_us),
+     .min = WSG_STEP_US_MIN,
+     .max = WSG_STEP_US_MAX,
+     .unit = "microseconds",
+     .def = "1000",
+     .section = WSG_SECTION_EMULATOR,
+     .arg = "US",
+     .help = "model step in microseconds\n"
+             "({range}, default {default})"},
+    {.name = "time-scale",
+     .type = WSG_SETTING_NUMBER,
+     .at = WSG_AT(time_scale),
+     .min = WSG_SCHED_SCALE_MIN,
+     .max = WSG_SCHED_SCALE_MAX,
+     .def = "1",
+     .section = WSG_SECTION_EMULATOR,
+     .arg = "X",
+     .help = "simulated seconds per real second\n"
+             "({range}, default {default})"},
+    {.name = "latency",
+     .type = WSG_SETTING_PARSE,
+     .parse = set_latency,
+     .min = 0,
+     .max = WSG_DELAY_MS_MAX,
+     .def = "0",
+     .section = WSG_SECTION_EMULATOR,
+     .arg = "MS[:JITTER]",
+     .help = "every packet the gripper sends\n"
+             "leaves MS ms of simulated time late,\n"
+             "plus 0..JITTER ms drawn from a fixed\n"
+             "seed, in order ({range} each; default\n"
+             "{default}: at once)"},
+    {.name = "log",
+     .type = WSG_SETTING_TEXT,
+     .at = WSG_AT(log_path),
+     .section = WSG_SECTION_EMULATOR,
+     .arg = "FILE",
+     .help = "communication log: one line per\n"
+             "packet; '-' for stderr"},
+    {.name = "config",
+     .type = WSG_SETTING_CONFIG,
+     .at = WSG_AT(config_path),
+     .cli_only = 1,
+     .section = WSG_SECTION_EMULATOR,
+     .arg = "FILE",
+     .help = "read settings from FILE first; the\n"
+             "command line overrides them"},
+    {.name = "grippers",
+     .type = WSG_SETTING_UINT,
+     .at = WSG_AT(grippers),
+     .min = 1,
+     .max = WSG_GRIPPERS_MAX,
+     .def = "1",
+     .section = WSG_SECTION_EMULATOR,
+     .arg = "N",
+     .help = "N independent grippers in one\n"
+             "process ({range}, default {default}); each\n"
+             "gets its own interfaces, counted up\n"
+             "from the ones given (see README)"},
+    {.name = "help",
+     .short_name = 'h',
+     .type = WSG_SETTING_HELP,
+     .cli_only = 1,
+     .section = WSG_SECTION_EMULATOR,
+     .help = "show this help and exit"},
+    {.name = "version",
+     .short_name = 'V',
+     .type = WSG_SETTING_VERSION,
+     .cli_only = 1,
+     .section = WSG_SECTION_EMULATOR,
+     .help = "show the version and exit"},
+};
+
+#define WSG_SETTINGS_N (sizeof settings / sizeof settings[0])
+
+const struct wsg_setting *wsg_options_settings(size_t *count)
+{
+    *count = WSG_SETTINGS_N;
+    return settings;
+}
+
+/* Apply one setting. val is its text (an argument, a file's value, the
+ * default), or NULL for a flag on the command line (--no-crc). line is 0
+ * for the command line and the defaults. On error, err gets the reason
+ * (without the setting's name). */
+static int apply(struct wsg_options *o, const struct wsg_setting *s,
+                 const char *val, unsigned line, char *err, size_t errcap)
+{
+    unsigned long u;
+    double d;
+    int b = 1;
+    char r[64];
+    const char *k;
+
+    switch (s->type) {
+    case WSG_SETTING_UINT:
+        if (parse_uint(val, (unsigned long)s->max, &u) < 0 || u < s->min)
+            goto bad_number;
+        *(uint32_t *)field(o, s->at) = (uint32_t)u;
+        return 0;
+    case WSG_SETTING_NUMBER:
+        if (parse_double(val, &d) < 0 || d < s->min || d > s->max)
+            goto bad_number;
+        *(double *)field(o, s->at) = d;
+        return 0;
+    case WSG_SETTING_MODEL:
+        if (s->parse)
+            return s->parse(o, s, val, line, err, errcap);
+        /* The range depends on the model, which may come later: checked
+         * in finish(). */
+        if (parse_double(val, &d) < 0 || d < 0) {
+            snprintf(err, errcap, "'%s' is not a non-negative number", val);
+            return -EINVAL;
+        }
+        model_value_set(field(o, s->at), d, line);
+        return 0;
+    case WSG_SETTING_BOOL:
+    case WSG_SETTING_NOT:
+        /* "no-crc = on" in a file means what --no-crc means. */
+        if (val && parse_bool(val, &b) < 0) {
+            snprintf(err, errcap, "'%s' is not on or off", val);
+            return -EINVAL;
+        }
+        *(int *)field(o, s->at) = s->type == WSG_SETTING_NOT ? !b : b;
+        return 0;
+    case WSG_SETTING_TEXT:
+        if (val[0] == '\0') {
+            snprintf(err, errcap, "an empty value");
+            return -EINVAL;
+        }
+        k = keep(o, val, line > 0);
+        if (!k)
+            return too_much_text(err, errcap);
+        *(const char **)field(o, s->at) = k;
+        return 0;
+    case WSG_SETTING_PARSE:
+        return s->parse(o, s, val, line, err, errcap);
+    default:
+        snprintf(err, errcap, "not a setting");
+        return -EINVAL;
+    }
+bad_number:
+    snprintf(err, errcap, "'%s' is not a number%s%s in %s", val,
+             s->unit ? " of " : "", s->unit ? s->unit : "",
+             range_text(s, r, sizeof r));
+    return -EINVAL;
+}
+
+/* A setting given on the command line or in the file: applied, and its
+ * flag set (an interface named is served). */
+static int give(struct wsg_options *o, const struct wsg_setting *s,
+                const char *val, unsigned line, char *err, size_t errcap)
+{
+    if (apply(o, s, val, line, err, errcap) < 0)
+        return -EINVAL;
+    if (s->given)
+        *(int *)field(o, s->given) = 1;
+    return 0;
 }
 
 void wsg_options_defaults(struct wsg_options *o)
 {
+    char err[512];
+    size_t i;
+
+    /* Zero is the default of the rest: no such interface, no log, the
+     * model's own values (homing direction WSG_HOME_DEFAULT). */
     memset(o, 0, sizeof *o);
-    o->tcp.addr[0] = 127;
-    o->tcp.addr[3] = 1;
-    o->tcp.port = WSG_TCP_PORT_DEFAULT;
-    o->max_clients = WSG_MAX_CLIENTS_DEFAULT;
-    o->grippers = 1;
-    o->udp.addr[0] = 127;
-    o->udp.addr[3] = 1;
-    o->udp.port = WSG_UDP_PORT_DEFAULT;
-    o->udp_remote_port = WSG_UDP_REMOTE_DEFAULT;
-    o->can_id = WSG_CAN_ID_DEFAULT;
-    o->control.addr[0] = 127;
-    o->control.addr[3] = 1;
-    o->time_scale = 1.0;
-    o->initial_part = -1.0;
-    o->initial_part_stiffness = 0.0;
-    o->serial = 1;
-    o->check_crc = 1;
-    o->disconnect_fast_stop = 1;
-    o->step_us = WSG_STEP_US_DEFAULT;
-    o->model = NULL;
-    o->acceleration = -1.0;
-    o->force_limit = -1.0;
-    o->homing_dir = WSG_HOME_DEFAULT;
-    o->clamp_travel = -1.0;
-    o->width_tolerance = -1.0;
+    o->can_id = WSG_CAN_ID_DEFAULT; /* --can gives it with an IFACE only */
+    for (i = 0; i < WSG_SETTINGS_N; i++) {
+        if (!settings[i].def)
+            continue;
+        /* The table's own defaults parse; the tests start the emulator
+         * with them all the time. */
+        if (apply(o, &settings[i], settings[i].def, 0, err, sizeof err) < 0) {
+            fprintf(stderr, "wsgemu: the default of --%s: %s\n",
+                    settings[i].name, err);
+            abort();
+        }
+    }
+}
+
+/* --help's text starts in this column. */
+#define WSG_HELP_COLUMN 29
+
+static const char *const section_names[] = {
+    [WSG_SECTION_INTERFACES] =
+        "Interfaces (with none of these: TCP and UDP on their defaults)",
+    [WSG_SECTION_GRIPPER] = "Gripper (what its web page sets)",
+    [WSG_SECTION_EMULATOR] = "Emulator",
+};
+
+/* One setting in --help: its names and value, with its negation if it has
+ * one ("--crc on|off, --no-crc"), then its text from WSG_HELP_COLUMN on,
+ * {range} and {default} filled in from the table. */
+static void usage_setting(FILE *f, const struct wsg_setting *s)
+{
+    int w = fprintf(f, "  ");
+    const char *p;
+    char r[64];
+    size_t i;
+
+    if (s->short_name)
+        w += fprintf(f, "-%c, ", s->short_name);
+    w += fprintf(f, "--%s", s->name);
+    if (s->arg)
+        w += fprintf(f, " %s", s->arg);
+    for (i = 0; i < WSG_SETTINGS_N; i++)
+        if (settings[i].type == WSG_SETTING_NOT && settings[i].at == s->at)
+            w += fprintf(f, ", --%s", settings[i].name);
+    if (w < WSG_HELP_COLUMN)
+        fprintf(f, "%*s", WSG_HELP_COLUMN - w, "");
+    else
+        fprintf(f, "\n%*s", WSG_HELP_COLUMN, "");
+    for (p = s->help; *p; p++) {
+        if (*p == '\n')
+            fprintf(f, "\n%*s", WSG_HELP_COLUMN, "");
+        else if (strncmp(p, "{range}", 7) == 0) {
+            fputs(range_text(s, r, sizeof r), f);
+            p += 6;
+        } else if (strncmp(p, "{default}", 9) == 0) {
+            fputs(s->def ? s->def : "none", f);
+            p += 8;
+        } else
+            fputc(*p, f);
+    }
+    fputc('\n', f);
+}
+
+static void usage(FILE *f)
+{
+    int section = -1;
+    size_t i;
+
+    fputs("Usage: wsgemu [OPTION]...\n"
+          "Emulate a Weiss WSG 50 gripper on its host interfaces.\n",
+          f);
+    for (i = 0; i < WSG_SETTINGS_N; i++) {
+        const struct wsg_setting *s = &settings[i];
+
+        if (!s->help)
+            continue;
+        if ((int)s->section != section) {
+            section = (int)s->section;
+            fprintf(f, "\n%s:\n", section_names[section]);
+        }
+        usage_setting(f, s);
+    }
+    fputs("\n"
+          "Config file: one 'key = value' per line, the keys the long option\n"
+          "names without dashes, the values as on the command line; blank\n"
+          "lines and lines starting with '#' are ignored; spaces around key\n"
+          "and value are dropped. no-crc and no-disconnect-fast-stop take\n"
+          "on|off (also true|false, yes|no, 1|0), like crc,\n"
+          "disconnect-fast-stop and force-sensor. Example:\n"
+          "  # cell 4\n"
+          "  model = wsg50-210\n"
+          "  tcp = 127.0.0.1:1000\n"
+          "  acceleration = 200\n"
+          "  tag = cell 4\n"
+          "Errors name the file and line; bad settings exit with status 2.\n"
+          "\n"
+          "When every interface is open, one line is printed on stdout:\n"
+          "  ready tcp=ADDR:PORT udp=ADDR:PORT>REMOTE pty=PATH can=IFACE:ID\n"
+          "        control=ADDR:PORT\n"
+          "(the fields of the open interfaces only; with --grippers N each\n"
+          "gripper field lists N values, comma-separated, in gripper order).\n"
+          "SIGINT or SIGTERM stops the emulator with exit status 0.\n",
+          f);
 }
 
 /* "--acceleration" or "FILE:LINE: acceleration", for an error message. */
@@ -678,23 +867,6 @@ static void origin(const struct wsg_options *o, unsigned line,
         snprintf(buf, cap, "%s:%u: %s", o->config_path, line, name);
     else
         snprintf(buf, cap, "--%s", name);
-}
-
-/* A range check against the model; prints the error itself. */
-static int check_range(const struct wsg_options *o, double v, double lo,
-                       double hi, unsigned line, const char *name,
-                       const char *unit)
-{
-    char where[512];
-
-    if (v >= lo && v <= hi)
-        return 0;
-    origin(o, line, name, where, sizeof where);
-    fprintf(stderr,
-            "wsgemu: %s: %g %s is out of range: %g..%g %s for the %s%s\n",
-            where, v, unit, lo, hi, unit, o->model ? o->model : "wsg50",
-            line ? "" : " (try --help)");
-    return -1;
 }
 
 /* The UDP ports of a fleet go up in pairs: by one when the listening and
@@ -785,11 +957,12 @@ void wsg_options_gripper(const struct wsg_options *o, unsigned i,
 }
 
 /* Everything that needs the model: resolve it, check the settings against
- * its limits (an error, not a silent clamp: a setting the gripper would
+ * its ranges (an error, not a silent clamp: a setting the gripper would
  * not take is a mistake in the setup) and write them into its config. */
 static enum wsg_options_result finish(struct wsg_options *o)
 {
     struct wsg_axis_config *c = &o->axis;
+    size_t i;
 
     if (!o->tcp_enabled && !o->udp_enabled && !o->pty_path && !o->can_iface)
         o->tcp_enabled = o->udp_enabled = 1;
@@ -812,37 +985,40 @@ static enum wsg_options_result finish(struct wsg_options *o)
         return WSG_OPTIONS_ERROR;
     }
     c->step_us = o->step_us;
-    if (o->acceleration >= 0) {
-        if (check_range(o, o->acceleration, c->min_acc, c->max_acc,
-                        o->line_acceleration, "acceleration", "mm/s^2") < 0)
-            return WSG_OPTIONS_ERROR;
-        c->default_acc = o->acceleration;
-    }
-    if (o->force_limit >= 0) {
-        if (check_range(o, o->force_limit, c->min_force, c->nom_force,
-                        o->line_force_limit, "force-limit", "N") < 0)
-            return WSG_OPTIONS_ERROR;
-        c->default_force = o->force_limit;
-    }
-    if (o->clamp_travel >= 0) {
-        if (check_range(o, o->clamp_travel, 0.0, c->stroke,
-                        o->line_clamp_travel, "clamping-travel", "mm") < 0)
-            return WSG_OPTIONS_ERROR;
-        c->clamp_travel = o->clamp_travel;
-    }
-    if (o->width_tolerance >= 0) {
-        if (check_range(o, o->width_tolerance, 0.0, c->stroke,
-                        o->line_width_tolerance, "width-tolerance", "mm") < 0)
-            return WSG_OPTIONS_ERROR;
-        c->width_tolerance = o->width_tolerance;
-    }
-    if (o->initial_part >= 0 && check_range(o, o->initial_part, 0.0, c->stroke,
-                                            o->line_part, "part", "mm") < 0)
+    for (i = 0; i < WSG_SETTINGS_N; i++) {
+        const struct wsg_setting *s = &settings[i];
+        const struct wsg_model_value *v;
+        struct wsg_axis_range r;
+        char where[512];
+
+        if (s->type != WSG_SETTING_MODEL)
+            continue;
+        v = field(o, s->at);
+        if (!v->given ||
+            wsg_axis_config_set(c, s->quantity, v->value, &r) == 0)
+            continue;
+        origin(o, v->line, s->name, where, sizeof where);
+        fprintf(stderr,
+                "wsgemu: %s: %g %s is out of range: %g..%g %s for the %s%s\n",
+                where, v->value, s->unit, r.min, r.max, s->unit,
+                o->model ? o->model : "wsg50", v->line ? "" : " (try --help)");
         return WSG_OPTIONS_ERROR;
+    }
     if (o->homing_dir != WSG_HOME_DEFAULT)
         c->homing_dir = o->homing_dir;
     c->force_sensor = o->force_sensor;
     return check_fleet(o);
+}
+
+/* A config file's key: a setting that is no command-line-only one. */
+static const struct wsg_setting *find_key(const char *key)
+{
+    size_t i;
+
+    for (i = 0; i < WSG_SETTINGS_N; i++)
+        if (!settings[i].cli_only && strcmp(settings[i].name, key) == 0)
+            return &settings[i];
+    return NULL;
 }
 
 /* Read the config file: "key = value" lines over the current options. */
@@ -861,7 +1037,7 @@ static enum wsg_options_result read_config(struct wsg_options *o,
     }
     while (fgets(line, sizeof line, f)) {
         char *key, *val, *eq, *end;
-        const struct option *opt;
+        const struct wsg_setting *s;
         char err[512];
         size_t n = strlen(line);
 
@@ -894,16 +1070,13 @@ static enum wsg_options_result read_config(struct wsg_options *o,
         while (end > key && isspace((unsigned char)end[-1]))
             end--;
         *end = '\0';
-        for (opt = long_options; opt->name; opt++)
-            if (strcmp(opt->name, key) == 0)
-                break;
-        if (!opt->name || opt->val == 'h' || opt->val == 'V' ||
-            opt->val == OPT_CONFIG) {
+        s = find_key(key);
+        if (!s) {
             fprintf(stderr, "wsgemu: %s:%u: unknown setting '%s'\n", path,
                     lineno, key);
             goto cleanup;
         }
-        if (set_option(o, opt->val, val, lineno, err, sizeof err) < 0) {
+        if (give(o, s, val, lineno, err, sizeof err) < 0) {
             fprintf(stderr, "wsgemu: %s:%u: %s: %s\n", path, lineno, key, err);
             goto cleanup;
         }
@@ -934,58 +1107,103 @@ static void bad_option(char **argv)
     fputs(" (try --help)\n", stderr);
 }
 
+/* getopt_long's table and short options, made from the settings: a
+ * setting's getopt value is its short option, else 256 plus its index. */
+static void getopt_tables(struct option *longopts, char *shortopts)
+{
+    size_t i;
+
+    /* ':' first: a missing argument is told apart from an unknown one. */
+    *shortopts++ = ':';
+    for (i = 0; i < WSG_SETTINGS_N; i++) {
+        const struct wsg_setting *s = &settings[i];
+        int arg = s->type != WSG_SETTING_NOT && s->type != WSG_SETTING_HELP &&
+                  s->type != WSG_SETTING_VERSION;
+
+        longopts[i].name = s->name;
+        longopts[i].has_arg = arg ? required_argument : no_argument;
+        longopts[i].flag = NULL;
+        longopts[i].val = s->short_name ? s->short_name : 256 + (int)i;
+        if (s->short_name) {
+            *shortopts++ = s->short_name;
+            if (arg)
+                *shortopts++ = ':';
+        }
+    }
+    memset(&longopts[i], 0, sizeof longopts[i]);
+    *shortopts = '\0';
+}
+
+/* The setting getopt_long's value c stands for; NULL for '?' and ':'. */
+static const struct wsg_setting *from_getopt(int c)
+{
+    size_t i;
+
+    if (c >= 256 && (size_t)(c - 256) < WSG_SETTINGS_N)
+        return &settings[c - 256];
+    for (i = 0; i < WSG_SETTINGS_N; i++)
+        if (settings[i].short_name && settings[i].short_name == c)
+            return &settings[i];
+    return NULL;
+}
+
 enum wsg_options_result wsg_options_parse(struct wsg_options *o, int argc,
                                           char **argv)
 {
-    int c, idx;
+    struct option longopts[WSG_SETTINGS_N + 1];
+    char shortopts[2 * WSG_SETTINGS_N + 2];
+    const struct wsg_setting *s;
+    int c;
 
+    getopt_tables(longopts, shortopts);
     /* getopt's own messages would name argv[0], which may be a path; ours
      * always start with "wsgemu:". */
     opterr = 0;
 
-    /* First pass: --help and --config only, so the file is read before
-     * the command line is applied over it. Errors wait for the second
-     * pass. optind = 0 makes glibc start over completely. */
+    /* First pass: --help, --version and --config only, so the file is
+     * read before the command line is applied over it. Errors wait for
+     * the second pass. optind = 0 makes glibc start over completely. */
     optind = 0;
-    while ((c = getopt_long(argc, argv, ":hV", long_options, NULL)) != -1) {
-        if (c == 'h') {
+    while ((c = getopt_long(argc, argv, shortopts, longopts, NULL)) != -1) {
+        s = from_getopt(c);
+        if (!s)
+            continue;
+        if (s->type == WSG_SETTING_HELP) {
             usage(stdout);
             return WSG_OPTIONS_EXIT;
         }
-        if (c == 'V') {
+        if (s->type == WSG_SETTING_VERSION) {
             /* The emulator's version; the firmware it emulates is what
              * Get System Information (50h) reports. */
             printf("wsgemu %s\n", WSG_VERSION);
             return WSG_OPTIONS_EXIT;
         }
-        if (c == OPT_CONFIG)
-            o->config_path = optarg;
+        if (s->type == WSG_SETTING_CONFIG)
+            *(const char **)field(o, s->at) = optarg;
     }
     if (o->config_path && read_config(o, o->config_path) != WSG_OPTIONS_RUN)
         return WSG_OPTIONS_ERROR;
 
     optind = 0;
-    while ((c = getopt_long(argc, argv, ":hV", long_options, &idx)) != -1) {
+    while ((c = getopt_long(argc, argv, shortopts, longopts, NULL)) != -1) {
         char err[512];
 
-        switch (c) {
-        case OPT_CONFIG:
-            break; /* read above */
-        case ':':
+        if (c == ':') {
             fprintf(stderr,
                     "wsgemu: option '%s' needs an argument (try --help)\n",
                     argv[optind - 1]);
             return WSG_OPTIONS_ERROR;
-        case '?':
+        }
+        s = from_getopt(c);
+        if (!s) {
             bad_option(argv);
             return WSG_OPTIONS_ERROR;
-        default:
-            if (set_option(o, c, optarg, 0, err, sizeof err) < 0) {
-                fprintf(stderr, "wsgemu: --%s: %s (try --help)\n",
-                        long_options[idx].name, err);
-                return WSG_OPTIONS_ERROR;
-            }
-            break;
+        }
+        if (s->type == WSG_SETTING_CONFIG)
+            continue; /* read above */
+        if (give(o, s, optarg, 0, err, sizeof err) < 0) {
+            fprintf(stderr, "wsgemu: --%s: %s (try --help)\n", s->name, err);
+            return WSG_OPTIONS_ERROR;
         }
     }
     if (optind < argc) {
