@@ -8,7 +8,7 @@
 #               not registered there: valgrind cannot run ASan programs).
 #               Any sanitizer finding, in a test or in the daemon a test
 #               started, aborts that program, and the test fails;
-#   build-fuzz  -DWSG_FUZZ=ON with clang: only the two libFuzzer harnesses
+#   build-fuzz  -DWSG_FUZZ=ON with clang: only the libFuzzer harnesses
 #               (target fuzz_harnesses) and ctest's fuzz label: the seeds
 #               and regression inputs through each, then each fuzzed for
 #               60 s (WSG_FUZZ_SECONDS) from a copy of the seed corpus in

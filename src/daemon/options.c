@@ -959,7 +959,7 @@ void wsg_options_gripper(const struct wsg_options *o, unsigned i,
 /* Everything that needs the model: resolve it, check the settings against
  * its ranges (an error, not a silent clamp: a setting the gripper would
  * not take is a mistake in the setup) and write them into its config. */
-static enum wsg_options_result finish(struct wsg_options *o)
+enum wsg_options_result wsg_options_finish(struct wsg_options *o)
 {
     struct wsg_axis_config *c = &o->axis;
     size_t i;
@@ -1021,20 +1021,12 @@ static const struct wsg_setting *find_key(const char *key)
     return NULL;
 }
 
-/* Read the config file: "key = value" lines over the current options. */
-static enum wsg_options_result read_config(struct wsg_options *o,
-                                           const char *path)
+enum wsg_options_result wsg_options_read_config(struct wsg_options *o, FILE *f,
+                                                const char *path)
 {
-    enum wsg_options_result res = WSG_OPTIONS_ERROR;
     char line[1024];
     unsigned lineno = 0;
-    FILE *f = fopen(path, "r");
 
-    if (!f) {
-        fprintf(stderr, "wsgemu: --config: cannot open '%s': %s\n", path,
-                strerror(errno));
-        return WSG_OPTIONS_ERROR;
-    }
     while (fgets(line, sizeof line, f)) {
         char *key, *val, *eq, *end;
         const struct wsg_setting *s;
@@ -1047,7 +1039,7 @@ static enum wsg_options_result read_config(struct wsg_options *o,
                     "wsgemu: %s:%u: line too long (%zu characters "
                     "at most)\n",
                     path, lineno, sizeof line - 2);
-            goto cleanup;
+            return WSG_OPTIONS_ERROR;
         }
         /* Trim the line; blank lines and comments carry nothing. */
         while (n && isspace((unsigned char)line[n - 1]))
@@ -1061,7 +1053,7 @@ static enum wsg_options_result read_config(struct wsg_options *o,
         if (!eq) {
             fprintf(stderr, "wsgemu: %s:%u: expected 'key = value'\n", path,
                     lineno);
-            goto cleanup;
+            return WSG_OPTIONS_ERROR;
         }
         val = eq + 1;
         while (isspace((unsigned char)*val))
@@ -1074,19 +1066,33 @@ static enum wsg_options_result read_config(struct wsg_options *o,
         if (!s) {
             fprintf(stderr, "wsgemu: %s:%u: unknown setting '%s'\n", path,
                     lineno, key);
-            goto cleanup;
+            return WSG_OPTIONS_ERROR;
         }
         if (give(o, s, val, lineno, err, sizeof err) < 0) {
             fprintf(stderr, "wsgemu: %s:%u: %s: %s\n", path, lineno, key, err);
-            goto cleanup;
+            return WSG_OPTIONS_ERROR;
         }
     }
     if (ferror(f)) {
         fprintf(stderr, "wsgemu: %s: read error\n", path);
-        goto cleanup;
+        return WSG_OPTIONS_ERROR;
     }
-    res = WSG_OPTIONS_RUN;
-cleanup:
+    return WSG_OPTIONS_RUN;
+}
+
+/* Read the config file named by --config. */
+static enum wsg_options_result read_config(struct wsg_options *o,
+                                           const char *path)
+{
+    enum wsg_options_result res;
+    FILE *f = fopen(path, "r");
+
+    if (!f) {
+        fprintf(stderr, "wsgemu: --config: cannot open '%s': %s\n", path,
+                strerror(errno));
+        return WSG_OPTIONS_ERROR;
+    }
+    res = wsg_options_read_config(o, f, path);
     fclose(f);
     return res;
 }
@@ -1211,5 +1217,5 @@ enum wsg_options_result wsg_options_parse(struct wsg_options *o, int argc,
                 argv[optind]);
         return WSG_OPTIONS_ERROR;
     }
-    return finish(o);
+    return wsg_options_finish(o);
 }

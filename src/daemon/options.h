@@ -15,6 +15,7 @@
 
 #include <stddef.h>
 #include <stdint.h>
+#include <stdio.h>
 
 #include "transport.h" /* struct wsg_endpoint */
 #include "wsg/axis.h"
@@ -160,6 +161,16 @@ void wsg_options_defaults(struct wsg_options *o);
  * The pty path is written to path. With one gripper: o itself. */
 void wsg_options_gripper(const struct wsg_options *o, unsigned i,
                          struct wsg_options *out, char *path, size_t pathlen);
+/* Read a config file's "key = value" lines from f (named path in
+ * messages) over the current contents of o. Prints a one-line
+ * "wsgemu: PATH:LINE: ..." error itself. Values are kept in o: f's lines
+ * must not be needed afterwards. */
+enum wsg_options_result wsg_options_read_config(struct wsg_options *o, FILE *f,
+                                                const char *path);
+/* After all settings are read: the defaults of what was not given, the
+ * model's config with every setting checked against the model's ranges,
+ * the fleet's counting checked. Prints its error itself. */
+enum wsg_options_result wsg_options_finish(struct wsg_options *o);
 /* Parse argv over the current contents of o (call wsg_options_defaults
  * first). Prints usage or a one-line "wsgemu: ..." error itself. */
 enum wsg_options_result wsg_options_parse(struct wsg_options *o, int argc,

@@ -1,7 +1,7 @@
 /*
  * Replays fuzz inputs without libFuzzer: every file named on the command
  * line, or every regular file in a directory named there, goes through
- * both harnesses (each accepts any bytes). Built by every compiler, so the
+ * every harness (each accepts any bytes). Built by every compiler, so the
  * seed corpus and every crash-regression input run in each ctest; a
  * violated invariant aborts, which fails the test.
  */
@@ -16,6 +16,7 @@
 
 int fuzz_frames_one(const uint8_t *data, size_t size);
 int fuzz_commands_one(const uint8_t *data, size_t size);
+int fuzz_config_one(const uint8_t *data, size_t size);
 
 /* Largest input replayed; libFuzzer's default -max_len is 4096. */
 #define REPLAY_MAX (1u << 20)
@@ -34,6 +35,7 @@ static int replay_file(const char *path)
     fclose(f);
     fuzz_frames_one(buf, n);
     fuzz_commands_one(buf, n);
+    fuzz_config_one(buf, n);
     return 0;
 }
 
@@ -86,7 +88,7 @@ int main(int argc, char **argv)
             count++;
         }
     }
-    printf("replayed %u inputs through both harnesses\n", count);
+    printf("replayed %u inputs through every harness\n", count);
     /* An empty corpus means the paths are wrong, not that all is well. */
     return rc || count == 0 ? 1 : 0;
 }

@@ -1,6 +1,6 @@
 #!/bin/bash
 # run.sh: fuzz one libFuzzer harness for a fixed time, the ctest tests
-# fuzz_frames_run and fuzz_commands_run of a -DWSG_FUZZ=ON build (clang).
+# fuzz_frames_run, fuzz_commands_run and fuzz_config_run of a -DWSG_FUZZ=ON build (clang).
 # libFuzzer starts from a fresh copy of the committed seed corpus in the
 # build tree and adds what it finds interesting to that copy only: the
 # source tree is never written.
@@ -9,7 +9,7 @@
 # writes) fails the test. It is kept: copied into FINDINGS as
 # HARNESS-KIND-HASH, hex-dumped into the log (so CI's output keeps it too),
 # and the command that adds it to the regression inputs is printed; every
-# build's fuzz_replay then runs it through both harnesses.
+# build's fuzz_replay then runs it through every harness.
 #
 # Usage: run.sh HARNESS SEEDS WORKDIR FINDINGS REGRESSIONS SECONDS
 #        run.sh --skip REASON
