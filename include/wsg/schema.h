@@ -16,8 +16,10 @@
  *
  * The names are the manual's: "SF_REFERENCED", "E_SUCCESS", "HOLDING";
  * field names are the manual's symbols in lower case with hyphens
- * ("no-part", "min-speed"). wsg_schema_key gives the one other spelling,
- * the control channel's JSON keys ("referenced", "no_part").
+ * ("no-part", "min-speed", "period-ms"), spelled out where it abbreviates
+ * ("acceleration" for ACC, "serial" for SN). The log and wsgctl print
+ * them as they are; wsg_schema_key gives the one other spelling, the
+ * control channel's JSON keys ("referenced", "no_part").
  */
 #ifndef WSG_SCHEMA_H
 #define WSG_SCHEMA_H
@@ -184,7 +186,7 @@ struct wsg_layout {
 /* FLAGS and PERIOD_MS of the commands that stream (3.4.1). */
 #define WSG_STREAM_REQUEST                                                    \
     WSG_FIELDS(WSG_F_BITS8("flags", WSG_NAMES("auto-update", "change-only")), \
-               WSG_F_U16("period", "ms"))
+               WSG_F_U16("period-ms", "ms"))
 
 /*
  * The commands of the 2.2.0 command set plus Get Temperature (46h), in ID
