@@ -143,63 +143,72 @@ static void test_key(void)
     CHECK(!strcmp(k, "grasp"));
 }
 
-/* The first field of a reply, formatted in style st. */
-static const char *fmt_reply(uint8_t id, const uint8_t *p, size_t n,
-                             const struct wsg_value_style *st, int field)
-{
-    static char buf[512];
-    struct wsg_value v[WSG_FIELDS_MAX];
-    int k = wsg_layout_decode(&wsg_schema[id].reply, p, n, v);
+static const struct wsg_value_style log_style = {3, "(", "|", ")", 0, 4};
+static const struct wsg_value_style human = {2, " (", " ", ")", 0, 0};
+static const struct wsg_value_style bare = {2, "", "", "", 1, 0};
 
-    if (k <= field)
-        return "(does not fit)";
-    wsg_value_format(&v[field], st, buf, sizeof buf);
-    return buf;
+/* A reply's parameters, which field of them, and how it reads. */
+static const struct {
+    uint8_t id;
+    const char *params;
+    size_t len;
+    const struct wsg_value_style *style;
+    int field;
+    const char *text;
+} formats[] = {
+    {WSG_CMD_GET_WIDTH, "\x00\x00\x5C\x42", 4, &log_style, 0, "55.000"},
+    {WSG_CMD_GET_WIDTH, "\x00\x00\x5C\x42", 4, &human, 0, "55.00"},
+    {WSG_CMD_GET_WIDTH, "\x00\x00\x5C", 3, &log_style, 0, NULL},
+    /* D0, D7, D10 (reserved), D12 */
+    {WSG_CMD_GET_SYSTEM_STATE, "\x81\x14\x00\x00", 4, &log_style, 0,
+     "0x00001481(SF_REFERENCED|SF_TARGET_POS_REACHED|D10|SF_FAST_STOP)"},
+    {WSG_CMD_GET_SYSTEM_STATE, "\x81\x14\x00\x00", 4, &bare, 0, "0x00001481"},
+    {WSG_CMD_GET_GRASP_STATE, "\x04", 1, &human, 0, "4 (HOLDING)"},
+    {WSG_CMD_GET_GRASP_STATE, "\x04", 1, &bare, 0, "4"},
+    {WSG_CMD_GET_GRASP_STATE, "\x09", 1, &log_style, 0, "9"},
+    {WSG_CMD_GET_SYSTEM_INFO, "\x01\x01\x00\x22\x01\x00\x00\x00", 8,
+     &log_style, 0, "1(WSG 50)"},
+    {WSG_CMD_GET_SYSTEM_INFO, "\x01\x01\x00\x22\x01\x00\x00\x00", 8,
+     &log_style, 2, "2.2.0"},
+    {WSG_CMD_GET_TEMPERATURE, "\xC9\xFF", 2, &human, 0, "-5.5"},
+    {WSG_CMD_GET_DEVICE_TAG, "a\"\x01", 3, &log_style, 0, "\"a\\x22\\x01\""},
+    {WSG_CMD_GET_DEVICE_TAG, "a", 1, &bare, 0, "a"},
+    {WSG_CMD_LOOP, "\x01\x02\x03\x04\x05\x06", 6, &log_style, 0,
+     "01 02 03 04 ...(6 bytes)"},
+    {WSG_CMD_LOOP, "\x01\x02\x03\x04\x05\x06", 6, &human, 0,
+     "01 02 03 04 05 06"},
+};
+
+static void test_format(void)
+{
+    size_t i;
+
+    for (i = 0; i < sizeof formats / sizeof formats[0]; i++) {
+        struct wsg_value v[WSG_FIELDS_MAX];
+        char buf[512];
+        int k = wsg_layout_decode(&wsg_schema[formats[i].id].reply,
+                                  (const uint8_t *)formats[i].params,
+                                  formats[i].len, v);
+
+        if (!formats[i].text) {
+            CHECK_EQ(k, -1); /* does not fit */
+            continue;
+        }
+        REQUIRE(k > formats[i].field);
+        wsg_value_format(&v[formats[i].field], formats[i].style, buf,
+                         sizeof buf);
+        if (strcmp(buf, formats[i].text) != 0)
+            fprintf(stderr, "case %zu: \"%s\", not \"%s\"\n", i, buf,
+                    formats[i].text);
+        CHECK(!strcmp(buf, formats[i].text));
+    }
 }
 
 static void test_walker(void)
 {
-    static const struct wsg_value_style log = {3, "(", "|", ")", 0, 4};
-    static const struct wsg_value_style human = {2, " (", " ", ")", 0, 0};
-    static const struct wsg_value_style bare = {2, "", "", "", 1, 0};
-    const uint8_t width[] = {0x00, 0x00, 0x5C, 0x42}; /* 55.0 */
-    const uint8_t flags[] = {0x81, 0x14, 0x00, 0x00}; /* D0 D7 D10 D12 */
-    const uint8_t gs[] = {4}, gs_bad[] = {9};
-    const uint8_t info[] = {1, 1, 0x00, 0x22, 1, 0, 0, 0};
-    const uint8_t temp[] = {0xC9, 0xFF}; /* -55 tenths */
-    const uint8_t tag[] = {'a', '"', 0x01};
-    const uint8_t loop[] = {1, 2, 3, 4, 5, 6};
     struct wsg_value v[WSG_FIELDS_MAX];
     double num[3] = {7, 2, 1};
     uint8_t out[8];
-
-    CHECK(!strcmp(fmt_reply(WSG_CMD_GET_WIDTH, width, 4, &log, 0), "55.000"));
-    CHECK(!strcmp(fmt_reply(WSG_CMD_GET_WIDTH, width, 4, &human, 0), "55.00"));
-    CHECK(!strcmp(fmt_reply(WSG_CMD_GET_WIDTH, width, 3, &log, 0),
-                  "(does not fit)"));
-    CHECK(!strcmp(fmt_reply(WSG_CMD_GET_SYSTEM_STATE, flags, 4, &log, 0),
-                  "0x00001481(SF_REFERENCED|SF_TARGET_POS_REACHED|D10|"
-                  "SF_FAST_STOP)"));
-    CHECK(!strcmp(fmt_reply(WSG_CMD_GET_SYSTEM_STATE, flags, 4, &bare, 0),
-                  "0x00001481"));
-    CHECK(!strcmp(fmt_reply(WSG_CMD_GET_GRASP_STATE, gs, 1, &human, 0),
-                  "4 (HOLDING)"));
-    CHECK(!strcmp(fmt_reply(WSG_CMD_GET_GRASP_STATE, gs, 1, &bare, 0), "4"));
-    CHECK(
-        !strcmp(fmt_reply(WSG_CMD_GET_GRASP_STATE, gs_bad, 1, &log, 0), "9"));
-    CHECK(!strcmp(fmt_reply(WSG_CMD_GET_SYSTEM_INFO, info, 8, &log, 0),
-                  "1(WSG 50)"));
-    CHECK(!strcmp(fmt_reply(WSG_CMD_GET_SYSTEM_INFO, info, 8, &log, 2),
-                  "2.2.0"));
-    CHECK(!strcmp(fmt_reply(WSG_CMD_GET_TEMPERATURE, temp, 2, &human, 0),
-                  "-5.5"));
-    CHECK(!strcmp(fmt_reply(WSG_CMD_GET_DEVICE_TAG, tag, 3, &log, 0),
-                  "\"a\\x22\\x01\""));
-    CHECK(!strcmp(fmt_reply(WSG_CMD_GET_DEVICE_TAG, tag, 1, &bare, 0), "a"));
-    CHECK(!strcmp(fmt_reply(WSG_CMD_LOOP, loop, 6, &log, 0),
-                  "01 02 03 04 ...(6 bytes)"));
-    CHECK(!strcmp(fmt_reply(WSG_CMD_LOOP, loop, 6, &human, 0),
-                  "01 02 03 04 05 06"));
 
     /* Fitting: fixed layouts exactly, a tail up to its maximum. */
     CHECK(wsg_layout_fits(&wsg_schema[WSG_CMD_STOP].reply, 0));
@@ -232,6 +241,7 @@ int main(void)
     test_rows();
     test_names();
     test_key();
+    test_format();
     test_walker();
     TEST_EXIT();
 }

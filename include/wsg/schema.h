@@ -354,7 +354,7 @@ void wsg_schema_key(const char *name, char *buf, size_t cap);
 /* One field's value, taken off the wire by wsg_layout_decode. */
 struct wsg_value {
     const struct wsg_field *field;
-    uint32_t raw;        /* integers, ENUM8, BITS, VERSION: as sent */
+    uint32_t raw;        /* the bytes as an integer (F32: its bits) */
     double num;          /* numbers in their unit (F32, I16_TENTHS, ints) */
     const uint8_t *data; /* TEXT, BYTES: into the payload */
     size_t len;

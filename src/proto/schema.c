@@ -110,6 +110,22 @@ int wsg_layout_fits(const struct wsg_layout *l, size_t n)
     return n == fixed;
 }
 
+/* An integer of size 1, 2 or 4 bytes off the wire, and onto it. */
+static uint32_t wsg_get_uint(const uint8_t *p, size_t size)
+{
+    return size == 1 ? p[0] : size == 2 ? wsg_get_u16(p) : wsg_get_u32(p);
+}
+
+static void wsg_put_uint(uint8_t *p, size_t size, uint32_t v)
+{
+    if (size == 1)
+        p[0] = (uint8_t)v;
+    else if (size == 2)
+        wsg_put_u16(p, (uint16_t)v);
+    else
+        wsg_put_u32(p, v);
+}
+
 int wsg_layout_decode(const struct wsg_layout *l, const uint8_t *p, size_t n,
                       struct wsg_value *out)
 {
@@ -120,38 +136,23 @@ int wsg_layout_decode(const struct wsg_layout *l, const uint8_t *p, size_t n,
     for (i = 0; i < l->n; i++) {
         const struct wsg_field *f = &l->fields[i];
         struct wsg_value *v = &out[i];
+        size_t size = wsg_field_size(f);
 
         memset(v, 0, sizeof *v);
         v->field = f;
-        switch (f->type) {
-        case WSG_FT_U8:
-        case WSG_FT_ENUM8:
-        case WSG_FT_BITS8:
-            v->raw = p[off];
-            break;
-        case WSG_FT_U16:
-        case WSG_FT_VERSION:
-            v->raw = wsg_get_u16(p + off);
-            break;
-        case WSG_FT_I16_TENTHS:
-            v->raw = wsg_get_u16(p + off);
-            v->num = (int16_t)v->raw / 10.0;
-            break;
-        case WSG_FT_U32:
-        case WSG_FT_BITS32:
-            v->raw = wsg_get_u32(p + off);
-            break;
-        case WSG_FT_F32:
-            v->num = wsg_get_f32(p + off);
-            break;
-        default: /* TEXT, BYTES: the rest */
+        if (size == 0) { /* TEXT, BYTES: the rest */
             v->data = p + off;
             v->len = n - off;
-            break;
+            continue;
         }
-        if (f->type != WSG_FT_F32 && f->type != WSG_FT_I16_TENTHS)
+        v->raw = wsg_get_uint(p + off, size);
+        if (f->type == WSG_FT_F32)
+            v->num = wsg_get_f32(p + off);
+        else if (f->type == WSG_FT_I16_TENTHS)
+            v->num = (int16_t)v->raw / 10.0;
+        else
             v->num = v->raw;
-        off += wsg_field_size(f);
+        off += size;
     }
     return (int)l->n;
 }
@@ -163,31 +164,15 @@ size_t wsg_layout_encode(const struct wsg_layout *l, const double *num,
 
     for (i = 0; i < l->n; i++) {
         const struct wsg_field *f = &l->fields[i];
+        size_t size = wsg_field_size(f);
 
-        switch (f->type) {
-        case WSG_FT_U8:
-        case WSG_FT_ENUM8:
-        case WSG_FT_BITS8:
-            out[off] = (uint8_t)num[i];
-            break;
-        case WSG_FT_U16:
-        case WSG_FT_VERSION:
-            wsg_put_u16(out + off, (uint16_t)num[i]);
-            break;
-        case WSG_FT_I16_TENTHS:
-            wsg_put_u16(out + off, (uint16_t)(int16_t)lround(num[i] * 10.0));
-            break;
-        case WSG_FT_U32:
-        case WSG_FT_BITS32:
-            wsg_put_u32(out + off, (uint32_t)num[i]);
-            break;
-        case WSG_FT_F32:
+        if (f->type == WSG_FT_F32)
             wsg_put_f32(out + off, (float)num[i]);
-            break;
-        default:
-            break;
-        }
-        off += wsg_field_size(f);
+        else if (f->type == WSG_FT_I16_TENTHS)
+            wsg_put_u16(out + off, (uint16_t)(int16_t)lround(num[i] * 10.0));
+        else if (size)
+            wsg_put_uint(out + off, size, (uint32_t)num[i]);
+        off += size;
     }
     return off;
 }
