@@ -1,7 +1,8 @@
 /*
  * wsgctl: command-line client of a WSG gripper (or of wsgemu) for people and
- * shell scripts. It names every command of the 2.2.0 command set, takes and
- * prints values in human units, waits through E_CMD_PENDING for a motion's
+ * shell scripts. It names every command of the 2.2.0 command set, takes
+ * values in human units and prints them by the protocol schema's reply
+ * layouts (wsg/schema.h), waits through E_CMD_PENDING for a motion's
  * final result, follows auto-update streams (watch), sends packets written in
  * WSG Commander's command-editor syntax (raw) and decodes hex dumps of
  * packets (decode). It talks TCP, UDP or a serial line; over TCP it always
@@ -84,6 +85,7 @@ struct ctx {
     struct opts o;
     struct conn c;
     int have_conn;
+    const char *command; /* wsgctl's name of the command running */
 };
 
 static void err(const char *fmt, ...)
@@ -511,177 +513,35 @@ static void conn_close(struct conn *c)
 
 /* ---- printing values ---- */
 
-static const char *const flag_names[32] = {
-    "SF_REFERENCED",
-    "SF_MOVING",
-    "SF_BLOCKED_MINUS",
-    "SF_BLOCKED_PLUS",
-    "SF_SOFT_LIMIT_MINUS",
-    "SF_SOFT_LIMIT_PLUS",
-    "SF_AXIS_STOPPED",
-    "SF_TARGET_POS_REACHED",
-    "SF_OVERDRIVE_MODE",
-    "SF_FORCECNTL_MODE",
-    NULL,
-    NULL,
-    "SF_FAST_STOP",
-    "SF_TEMP_WARNING",
-    "SF_TEMP_FAULT",
-    "SF_POWER_FAULT",
-    "SF_CURR_FAULT",
-    "SF_FINGER_FAULT",
-    "SF_CMD_FAILURE",
-    "SF_SCRIPT_RUNNING",
-    "SF_SCRIPT_FAILURE",
-};
-
-static const char *grasp_state_name(unsigned s)
+/* The parameters of a successful answer with this ID, by the schema's
+ * reply layout: one line per field, "width 55.00 mm", "grasp-state 4
+ * (HOLDING)", each after indent; with --quiet, the bare values on one
+ * line ("55.00", "1 1 2.2.0 1"). Returns 1 if they fit the layout and
+ * there are any, else 0 (nothing printed). */
+static int print_values(const struct opts *o, const char *indent, uint8_t id,
+                        const uint8_t *p, size_t n)
 {
-    static const char *const names[] = {"IDLE",        "GRASPING", "NO_PART",
-                                        "PART_LOST",   "HOLDING",  "RELEASING",
-                                        "POSITIONING", "ERROR"};
+    static const struct wsg_value_style human = {2, " (", " ", ")", 0, 0};
+    static const struct wsg_value_style bare = {2, "", "", "", 1, 0};
+    struct wsg_value v[WSG_FIELDS_MAX];
+    char buf[4 * WSG_REPLY_PARAMS_MAX + 64];
+    int k = wsg_layout_decode(&wsg_schema[id].reply, p, n, v);
 
-    return s < sizeof names / sizeof names[0] ? names[s] : "UNKNOWN";
-}
-
-static void print_flags(uint32_t flags)
-{
-    printf("0x%08lX", (unsigned long)flags);
-    for (unsigned b = 0; b < 32; b++) {
-        if (!(flags & (1ul << b)))
-            continue;
-        if (flag_names[b])
-            printf(" %s", flag_names[b]);
-        else
-            printf(" D%u", b);
-    }
-}
-
-/* One value: "width 55.00 mm" or, with --quiet, "55.00". */
-static void print_float(const struct opts *o, const char *what, float v,
-                        const char *unit)
-{
-    if (o->quiet)
-        printf("%.2f\n", v);
-    else
-        printf("%s %.2f %s\n", what, v, unit);
-}
-
-/* The parameters of a successful answer with this ID in human form.
- * Returns 1 if the ID and length were known, else 0 (nothing printed). */
-static int print_values(const struct opts *o, uint8_t id, const uint8_t *p,
-                        size_t n)
-{
-    switch (id) {
-    case WSG_CMD_GET_WIDTH:
-    case WSG_CMD_GET_SPEED:
-    case WSG_CMD_GET_FORCE:
-    case WSG_CMD_GET_ACCELERATION:
-    case WSG_CMD_GET_FORCE_LIMIT:
-        if (n != 4)
-            return 0;
-        print_float(o,
-                    id == WSG_CMD_GET_WIDTH          ? "width"
-                    : id == WSG_CMD_GET_SPEED        ? "speed"
-                    : id == WSG_CMD_GET_FORCE        ? "force"
-                    : id == WSG_CMD_GET_ACCELERATION ? "acceleration"
-                                                     : "force-limit",
-                    wsg_get_f32(p),
-                    id == WSG_CMD_GET_WIDTH          ? "mm"
-                    : id == WSG_CMD_GET_SPEED        ? "mm/s"
-                    : id == WSG_CMD_GET_ACCELERATION ? "mm/s2"
-                                                     : "N");
-        return 1;
-    case WSG_CMD_GET_SOFT_LIMITS:
-        if (n != 8)
-            return 0;
-        if (o->quiet)
-            printf("%.2f %.2f\n", wsg_get_f32(p), wsg_get_f32(p + 4));
-        else
-            printf("soft-limits minus %.2f mm plus %.2f mm\n", wsg_get_f32(p),
-                   wsg_get_f32(p + 4));
-        return 1;
-    case WSG_CMD_GET_SYSTEM_STATE:
-        if (n != 4)
-            return 0;
-        if (!o->quiet)
-            printf("state ");
-        print_flags(wsg_get_u32(p));
-        putchar('\n');
-        return 1;
-    case WSG_CMD_GET_GRASP_STATE:
-        if (n != 1)
-            return 0;
-        if (o->quiet)
-            printf("%s\n", grasp_state_name(p[0]));
-        else
-            printf("grasp %u %s\n", p[0], grasp_state_name(p[0]));
-        return 1;
-    case WSG_CMD_GET_GRASP_STATS:
-        if (n != 8)
-            return 0;
-        if (o->quiet)
-            printf("%lu %u %u\n", (unsigned long)wsg_get_u32(p),
-                   wsg_get_u16(p + 4), wsg_get_u16(p + 6));
-        else
-            printf("total %lu\nno-part %u\nlost-part %u\n",
-                   (unsigned long)wsg_get_u32(p), wsg_get_u16(p + 4),
-                   wsg_get_u16(p + 6));
-        return 1;
-    case WSG_CMD_GET_TEMPERATURE:
-        if (n != 2)
-            return 0;
-        if (o->quiet)
-            printf("%.1f\n", (int16_t)wsg_get_u16(p) / 10.0);
-        else
-            printf("temperature %.1f degC\n", (int16_t)wsg_get_u16(p) / 10.0);
-        return 1;
-    case WSG_CMD_GET_SYSTEM_INFO: {
-        static const char *const types[] = {"unknown", "WSG 50", "WSG 32",
-                                            "KMS 40",  "WTS",    "WSG 25",
-                                            "WSG 70"};
-        unsigned sw;
-        if (n != 8)
-            return 0;
-        sw = wsg_get_u16(p + 2);
-        if (o->quiet) /* TYPE HWREV FIRMWARE SN, like the other readings */
-            printf("%u %u %u.%u.%u %lu\n", p[0], p[1], sw >> 12,
-                   (sw >> 8) & 15, (sw >> 4) & 15,
-                   (unsigned long)wsg_get_u32(p + 4));
-        else
-            printf("type %u (%s)\nhardware-revision %u\nfirmware "
-                   "%u.%u.%u\nserial-number %lu\n",
-                   p[0], p[0] < 7 ? types[p[0]] : "?", p[1], sw >> 12,
-                   (sw >> 8) & 15, (sw >> 4) & 15,
-                   (unsigned long)wsg_get_u32(p + 4));
-        return 1;
-    }
-    case WSG_CMD_GET_DEVICE_TAG:
-        if (o->quiet)
-            printf("%.*s\n", (int)n, (const char *)p);
-        else
-            printf("tag \"%.*s\"\n", (int)n, (const char *)p);
-        return 1;
-    case WSG_CMD_GET_SYSTEM_LIMITS: {
-        if (n != 32)
-            return 0;
-        float v[8];
-        for (int i = 0; i < 8; i++)
-            v[i] = wsg_get_f32(p + 4 * i);
-        if (o->quiet) {
-            for (int i = 0; i < 8; i++)
-                printf("%.2f%c", v[i], i == 7 ? '\n' : ' ');
-        } else {
-            printf("stroke %.2f mm\nspeed %.2f .. %.2f mm/s\n"
-                   "acceleration %.2f .. %.2f mm/s2\n"
-                   "force %.2f .. %.2f N (overdrive %.2f N)\n",
-                   v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7]);
-        }
-        return 1;
-    }
-    default:
+    if (k <= 0)
         return 0;
+    for (int i = 0; i < k; i++) {
+        const char *unit = v[i].field->unit;
+
+        wsg_value_format(&v[i], o->quiet ? &bare : &human, buf, sizeof buf);
+        if (o->quiet)
+            printf("%s%s", i ? " " : indent, buf);
+        else
+            printf("%s%s %s%s%s\n", indent, v[i].field->name, buf,
+                   unit[0] ? " " : "", unit);
     }
+    if (o->quiet)
+        putchar('\n');
+    return 1;
 }
 
 static void print_hex(const uint8_t *p, size_t n)
@@ -713,11 +573,11 @@ static int gripper_error(uint8_t id, unsigned status)
 static int control_read(struct ctx *x, uint8_t id, const uint8_t *payload,
                         size_t len)
 {
+    const struct wsg_layout *layout = &wsg_schema[id].reply;
     char line[2048];
-    size_t n = 0;
-    double deadline = now_ms() + x->o.timeout_s * 1000.0, v[3] = {0, 0, 0};
-    uint8_t p[8];
-    size_t np = 4;
+    size_t n = 0, np;
+    double deadline = now_ms() + x->o.timeout_s * 1000.0, v[WSG_FIELDS_MAX];
+    uint8_t p[WSG_REPLY_PARAMS_MAX];
     int ok = 1;
 
     /* Readings only: 42h's reset flag (stats --reset) changes the
@@ -726,6 +586,14 @@ static int control_read(struct ctx *x, uint8_t id, const uint8_t *payload,
         err("--control reads only: %02Xh %s with parameters changes the "
             "gripper",
             id, cmd_name(id));
+        return EXIT_USAGE;
+    }
+    /* A reading answers numbers, which the channel's state may hold; not
+     * nothing, not text. */
+    if (layout->n == 0 || layout->fields[layout->n - 1].type == WSG_FT_TEXT ||
+        layout->fields[layout->n - 1].type == WSG_FT_BYTES) {
+        err("--control reads only: %02Xh %s is not a reading", id,
+            cmd_name(id));
         return EXIT_USAGE;
     }
     if (write(x->c.fd, "state\n", 6) != 6) {
@@ -753,51 +621,20 @@ static int control_read(struct ctx *x, uint8_t id, const uint8_t *payload,
         err("control channel: %s", line);
         return EXIT_CONN;
     }
-    switch (id) {
-    case WSG_CMD_GET_SYSTEM_STATE:
-        ok = wsg_json_num(line, "flags", v) == 0;
-        wsg_put_u32(p, (uint32_t)v[0]);
-        break;
-    case WSG_CMD_GET_GRASP_STATE:
-        ok = wsg_json_num(line, "grasp_state", v) == 0;
-        p[0] = (uint8_t)v[0];
-        np = 1;
-        break;
-    case WSG_CMD_GET_WIDTH:
-    case WSG_CMD_GET_SPEED:
-    case WSG_CMD_GET_FORCE:
-        ok = wsg_json_num(line,
-                          id == WSG_CMD_GET_WIDTH   ? "width"
-                          : id == WSG_CMD_GET_SPEED ? "speed"
-                                                    : "force",
-                          v) == 0;
-        wsg_put_f32(p, (float)v[0]);
-        break;
-    case WSG_CMD_GET_TEMPERATURE:
-        ok = wsg_json_num(line, "temperature", v) == 0;
-        wsg_put_u16(
-            p, (uint16_t)(int16_t)(v[0] * 10.0 + (v[0] < 0 ? -0.5 : 0.5)));
-        np = 2;
-        break;
-    case WSG_CMD_GET_GRASP_STATS:
-        ok = wsg_json_num(line, "total", v) == 0 &&
-             wsg_json_num(line, "no_part", v + 1) == 0 &&
-             wsg_json_num(line, "lost_part", v + 2) == 0;
-        wsg_put_u32(p, (uint32_t)v[0]);
-        wsg_put_u16(p + 4, (uint16_t)v[1]);
-        wsg_put_u16(p + 6, (uint16_t)v[2]);
-        np = 8;
-        break;
-    default:
-        err("--control reads only: %02Xh %s is not a reading", id,
-            cmd_name(id));
-        return EXIT_USAGE;
+    /* Each field of the reply under its name in the channel's spelling
+     * ("no_part"), put on the wire as the gripper would send it. */
+    for (size_t i = 0; ok && i < layout->n; i++) {
+        char key[24]; /* with quotes and colon, fits wsg_json_num's 32 */
+
+        wsg_schema_key(layout->fields[i].name, key, sizeof key);
+        ok = wsg_json_num(line, key, v + i) == 0;
     }
     if (!ok) {
         err("control channel: unexpected state: %s", line);
         return EXIT_CONN;
     }
-    print_values(&x->o, id, p, np);
+    np = wsg_layout_encode(layout, v, p);
+    print_values(&x->o, "", id, p, np);
     return EXIT_OK;
 }
 
@@ -816,13 +653,12 @@ static int simple(struct ctx *x, uint8_t id, const uint8_t *payload,
     if (rc)
         return rc;
     if (none_ok && r.status == WSG_E_NOT_AVAILABLE) {
-        printf(x->o.quiet ? "none\n" : "%s none\n",
-               id == WSG_CMD_GET_SOFT_LIMITS ? "soft-limits" : "tag");
+        printf(x->o.quiet ? "none\n" : "%s none\n", x->command);
         return EXIT_OK;
     }
     if (r.status != WSG_E_SUCCESS)
         return gripper_error(id, r.status);
-    print_values(&x->o, id, R_PARAMS(&r), R_NPARAMS(&r));
+    print_values(&x->o, "", id, R_PARAMS(&r), R_NPARAMS(&r));
     return EXIT_OK;
 }
 
@@ -1126,7 +962,7 @@ static void print_reply(const struct opts *o, const struct reply *r)
     print_hex(R_PARAMS(r), R_NPARAMS(r));
     putchar('\n');
     if (r->status == WSG_E_SUCCESS)
-        print_values(o, r->id, R_PARAMS(r), R_NPARAMS(r));
+        print_values(o, "", r->id, R_PARAMS(r), R_NPARAMS(r));
 }
 
 static int c_raw(struct ctx *x, int argc, char **argv)
@@ -1226,7 +1062,7 @@ static int c_watch(struct ctx *x, int argc, char **argv)
         }
         deadline = now_ms() + gap;
         print_stamp(&x->o);
-        print_values(&x->o, id, R_PARAMS(&r), R_NPARAMS(&r));
+        print_values(&x->o, "", id, R_PARAMS(&r), R_NPARAMS(&r));
         fflush(stdout);
         got++;
     }
@@ -1237,8 +1073,8 @@ static int c_watch(struct ctx *x, int argc, char **argv)
     if (conn_send(&x->c, id, pl, 3) == 0) {
         double until = now_ms() + 1000.0;
         while (conn_recv(&x->c, &r, until) == 1) {
-            if (r.id == id &&
-                r.len == 2 + (id == WSG_CMD_GET_GRASP_STATE ? 1 : 4)) {
+            if (r.id == id && r.len >= 2 &&
+                wsg_layout_fits(&wsg_schema[id].reply, r.len - 2u)) {
                 /* Drain what was in flight before the answer. */
                 until = now_ms() + 50.0;
             }
@@ -1308,37 +1144,12 @@ static int leads_with_status(const uint8_t *payload, size_t size)
  * with E_SUCCESS, the parameters that ID returns. */
 static int reply_fits(uint8_t id, const uint8_t *payload, size_t size)
 {
-    size_t n = size - 2;
-
     if (!leads_with_status(payload, size))
         return 0;
     if (wsg_get_u16(payload) != WSG_E_SUCCESS)
-        return n == 0;
-    switch (id) {
-    case WSG_CMD_LOOP:
-        return 1; /* the echo: any length */
-    case WSG_CMD_GET_DEVICE_TAG:
-        return n <= WSG_TAG_MAX;
-    case WSG_CMD_GET_ACCELERATION:
-    case WSG_CMD_GET_FORCE_LIMIT:
-    case WSG_CMD_GET_SYSTEM_STATE:
-    case WSG_CMD_GET_WIDTH:
-    case WSG_CMD_GET_SPEED:
-    case WSG_CMD_GET_FORCE:
-        return n == 4;
-    case WSG_CMD_GET_GRASP_STATE:
-        return n == 1;
-    case WSG_CMD_GET_TEMPERATURE:
-        return n == 2;
-    case WSG_CMD_GET_SOFT_LIMITS:
-    case WSG_CMD_GET_GRASP_STATS:
-    case WSG_CMD_GET_SYSTEM_INFO:
-        return n == 8;
-    case WSG_CMD_GET_SYSTEM_LIMITS:
-        return n == 32;
-    default:
-        return n == 0 && wsg_cmd_name(id) != NULL;
-    }
+        return size == 2;
+    return wsg_cmd_name(id) != NULL &&
+           wsg_layout_fits(&wsg_schema[id].reply, size - 2u);
 }
 
 /* "request", "reply", or both where the bytes fit either (a Loop, a
@@ -1435,9 +1246,8 @@ static int c_decode(struct ctx *x, int argc, char **argv)
             size > 2) {
             struct opts o = x->o;
             o.quiet = 0;
-            fputs("  ", stdout);
-            if (!print_values(&o, id, payload + 2, size - 2u))
-                printf("(no decoded values)\n");
+            if (!print_values(&o, "  ", id, payload + 2, size - 2u))
+                printf("  (no decoded values)\n");
         }
         i = end;
     }
@@ -1591,9 +1401,11 @@ static void usage(FILE *f)
             "  --timeout S            wait for an answer (through "
             "E_CMD_PENDING) up to S\n"
             "                         seconds, default 10\n"
-            "  -q, --quiet            plain values for scripts: \"55.00\" "
-            "instead of\n"
-            "                         \"width 55.00 mm\"\n"
+            "  -q, --quiet            bare values for scripts, one answer "
+            "a line: \"55.00\"\n"
+            "                         instead of \"width 55.00 mm\"; flags "
+            "in hex, enums as\n"
+            "                         numbers\n"
             "  -h, --help             this text\n"
             "  -V, --version          wsgctl's version\n"
             "\nCommands:\n",
@@ -1604,19 +1416,19 @@ static void usage(FILE *f)
         print_wrapped(f, commands[i].what);
         fprintf(f, "      e.g. %s\n", commands[i].example);
     }
-    fprintf(f, "\nOutput: values with their units (\"width 55.00 mm\"), one "
-               "per line;\n"
-               "commands that only act print nothing on success. watch "
-               "prefixes each\n"
-               "value with the local time (HH:MM:SS.mmm; with -q, Unix "
-               "seconds.mmm). raw\n"
-               "prints \"ID Name: STATUS\" and \"params (N): hex bytes\" "
-               "for each answer\n"
-               "(E_CMD_PENDING too), then the decoded values of known IDs. "
-               "Errors go to\n"
-               "stderr "
-               "with the manual's names (\"wsgctl: 25h Grasp: "
-               "E_CMD_FAILED\").\n"
+    fprintf(f, "\nOutput: values with the manual's field names and their "
+               "units, one per\n"
+               "line (\"width 55.00 mm\", \"grasp-state 4 (HOLDING)\"); "
+               "commands that only act\n"
+               "print nothing on success. watch prefixes each value with "
+               "the local time\n"
+               "(HH:MM:SS.mmm; with -q, Unix seconds.mmm). raw prints "
+               "\"ID Name: STATUS\" and\n"
+               "\"params (N): hex bytes\" for each answer (E_CMD_PENDING "
+               "too), then the\n"
+               "decoded values of known IDs. Errors go to stderr with the "
+               "manual's names\n"
+               "(\"wsgctl: 25h Grasp: E_CMD_FAILED\").\n"
                "\nExit status: 0 E_SUCCESS; 1 the gripper answered another "
                "status (decode:\n"
                "a bad checksum or incomplete packet); 2 usage error; 3 "
@@ -1735,6 +1547,7 @@ int main(int argc, char **argv)
     sigaction(SIGTERM, &sa, NULL);
     signal(SIGPIPE, SIG_IGN);
 
+    x.command = cmd->name;
     if (cmd->conn) {
         rc = conn_open(&x.c, &x.o);
         if (rc < 0) {

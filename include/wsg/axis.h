@@ -18,26 +18,10 @@
 
 #include <stdint.h>
 
-/* Appendix B: system state flags. */
-#define WSG_SF_REFERENCED         (1u << 0)
-#define WSG_SF_MOVING             (1u << 1)
-#define WSG_SF_BLOCKED_MINUS      (1u << 2)
-#define WSG_SF_BLOCKED_PLUS       (1u << 3)
-#define WSG_SF_SOFT_LIMIT_MINUS   (1u << 4)
-#define WSG_SF_SOFT_LIMIT_PLUS    (1u << 5)
-#define WSG_SF_AXIS_STOPPED       (1u << 6)
-#define WSG_SF_TARGET_POS_REACHED (1u << 7)
-#define WSG_SF_OVERDRIVE_MODE     (1u << 8)
-#define WSG_SF_FORCECNTL_MODE     (1u << 9)
-#define WSG_SF_FAST_STOP          (1u << 12)
-#define WSG_SF_TEMP_WARNING       (1u << 13)
-#define WSG_SF_TEMP_FAULT         (1u << 14)
-#define WSG_SF_POWER_FAULT        (1u << 15)
-#define WSG_SF_CURR_FAULT         (1u << 16)
-#define WSG_SF_FINGER_FAULT       (1u << 17)
-#define WSG_SF_CMD_FAILURE        (1u << 18)
-#define WSG_SF_SCRIPT_RUNNING     (1u << 19)
-#define WSG_SF_SCRIPT_FAILURE     (1u << 20)
+#include "wsg/schema.h"
+
+/* The system state flags (WSG_SF_*, Appendix B) and the grasping states
+ * (enum wsg_grasp_state, 41h) are the schema's. */
 
 /* Faults that can be injected; each is also its flag. */
 #define WSG_FAULTS                                                            \
@@ -48,18 +32,6 @@
 #define WSG_FAULTS_BLOCKING                                                   \
     (WSG_SF_TEMP_FAULT | WSG_SF_POWER_FAULT | WSG_SF_CURR_FAULT |             \
      WSG_SF_FINGER_FAULT)
-
-/* Grasping states (41h), as real grippers report them. */
-enum wsg_grasp_state {
-    WSG_GS_IDLE = 0,
-    WSG_GS_GRASPING = 1,
-    WSG_GS_NO_PART = 2,
-    WSG_GS_PART_LOST = 3,
-    WSG_GS_HOLDING = 4,
-    WSG_GS_RELEASING = 5,
-    WSG_GS_POSITIONING = 6,
-    WSG_GS_ERROR = 7
-};
 
 enum wsg_homing_dir {
     WSG_HOME_DEFAULT = 0,

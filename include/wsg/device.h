@@ -20,8 +20,6 @@
 #include "wsg/axis.h"
 #include "wsg/proto.h"
 
-#define WSG_TAG_MAX 64u
-
 enum wsg_stream_id {
     WSG_STREAM_SYSTEM_STATE = 0, /* 40h */
     WSG_STREAM_GRASP_STATE,      /* 41h */
@@ -152,11 +150,5 @@ uint64_t wsg_device_next(const struct wsg_device *d);
 /* Advance simulated time by n steps while idle (the state cannot change, so
  * the loop may skip stepping through a quiet gap). */
 void wsg_device_advance_idle(struct wsg_device *d, uint64_t nsteps);
-
-/* The command table, for tools and logs: name of an ID or NULL. */
-const char *wsg_cmd_name(uint8_t id);
-/* A request of this ID with len payload bytes passes the length rules
- * (1 or 0); an unknown ID fits nothing. */
-int wsg_cmd_request_fits(uint8_t id, size_t len);
 
 #endif

@@ -1,6 +1,7 @@
 /*
- * The command table's private types: a handler per command ID and the rules
- * the dispatcher checks once, centrally, before any handler runs.
+ * The command table's private types: a handler per command ID with the
+ * schema's length rules and flags (wsg/schema.h), which the dispatcher
+ * checks once, centrally, before any handler runs.
  */
 #ifndef WSG_CMD_H
 #define WSG_CMD_H
@@ -20,17 +21,9 @@ typedef uint16_t (*wsg_cmd_handler)(struct wsg_device *d,
                                     const struct wsg_frame *f,
                                     struct wsg_reply *r);
 
-/* Command flags. */
-#define WSG_CMDF_MOTION 0x01u /* refused in FAST STOP and on faults */
-#define WSG_CMDF_HOMED  0x02u /* refused before homing */
-#define WSG_CMDF_ASYNC                                                        \
-    0x04u                       /* pending, then a final result; not while    \
-                                   moving */
-#define WSG_CMDF_NO_PARAM 0x08u /* a length error is E_NO_PARAM_EXPECTED */
-#define WSG_CMDF_EMPTY_OK 0x10u /* an empty payload is also accepted */
-/* A motion command: all of the motion rules. */
-#define WSG_CMDF_MOVE (WSG_CMDF_MOTION | WSG_CMDF_ASYNC)
-
+/* The dispatcher's entry for one command ID: the schema's name, length
+ * rules and flags (WSG_CMDF_*) with the handler, in one static table, so
+ * dispatching reads one entry. */
 struct wsg_cmd_desc {
     const char *name;
     wsg_cmd_handler handler;

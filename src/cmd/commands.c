@@ -1,5 +1,7 @@
 /*
- * The command handlers and the dispatch table.
+ * The command handlers and the dispatch table, one entry per command of the
+ * schema (wsg/schema.h), which gives its name, length rules and flags and
+ * names its handler here.
  *
  * By the time a handler runs, the dispatcher has checked the payload length
  * and the gripper's state against the command's table entry. Handlers
@@ -371,60 +373,9 @@ static uint16_t wsg_cmd_system_limits(struct wsg_device *d,
     return wsg_reply_f32(r, c->ovr_force);
 }
 
+/* One entry per row of the schema: its name, length rules and flags, and
+ * the handler the row names. */
+#define WSG_CMD_DESC_(id, sym, handler, name, min, max, flags, req, rep)      \
+    [id] = {name, wsg_cmd_##handler, min, max, flags},
 const struct wsg_cmd_desc wsg_cmd_table[256] = {
-    [WSG_CMD_LOOP] = {"Loop", wsg_cmd_loop, 0, WSG_PAYLOAD_MAX, 0},
-    [WSG_CMD_DISCONNECT] = {"Disconnect", wsg_cmd_disconnect, 0, 0,
-                            WSG_CMDF_NO_PARAM},
-    [WSG_CMD_HOMING] = {"Homing", wsg_cmd_homing, 1, 1, WSG_CMDF_MOVE},
-    [WSG_CMD_PREPOSITION] = {"Preposition", wsg_cmd_preposition, 9, 9,
-                             WSG_CMDF_MOVE | WSG_CMDF_HOMED},
-    [WSG_CMD_STOP] = {"Stop", wsg_cmd_stop, 0, 0, WSG_CMDF_NO_PARAM},
-    /* An emergency stop is never refused for its payload. */
-    [WSG_CMD_FAST_STOP] = {"FastStop", wsg_cmd_fast_stop, 0, WSG_PAYLOAD_MAX,
-                           0},
-    [WSG_CMD_ACK_FAST_STOP] = {"AckFastStop", wsg_cmd_ack, 3, 3, 0},
-    [WSG_CMD_GRASP] = {"Grasp", wsg_cmd_grasp, 8, 8,
-                       WSG_CMDF_MOVE | WSG_CMDF_HOMED},
-    [WSG_CMD_RELEASE] = {"Release", wsg_cmd_release, 8, 8,
-                         WSG_CMDF_MOVE | WSG_CMDF_HOMED},
-    [WSG_CMD_SET_ACCELERATION] = {"SetAcceleration", wsg_cmd_set_acc, 4, 4, 0},
-    [WSG_CMD_GET_ACCELERATION] = {"GetAcceleration", wsg_cmd_get_acc, 0, 0,
-                                  WSG_CMDF_NO_PARAM},
-    [WSG_CMD_SET_FORCE_LIMIT] = {"SetForceLimit", wsg_cmd_set_force, 4, 4, 0},
-    [WSG_CMD_GET_FORCE_LIMIT] = {"GetForceLimit", wsg_cmd_get_force_limit, 0,
-                                 0, WSG_CMDF_NO_PARAM},
-    [WSG_CMD_SET_SOFT_LIMITS] = {"SetSoftLimits", wsg_cmd_set_soft_limits, 8,
-                                 8, 0},
-    [WSG_CMD_GET_SOFT_LIMITS] = {"GetSoftLimits", wsg_cmd_get_soft_limits, 0,
-                                 0, WSG_CMDF_NO_PARAM},
-    [WSG_CMD_CLEAR_SOFT_LIMITS] = {"ClearSoftLimits",
-                                   wsg_cmd_clear_soft_limits, 0, 0,
-                                   WSG_CMDF_NO_PARAM},
-    [WSG_CMD_OVERDRIVE] = {"OverdriveMode", wsg_cmd_overdrive, 1, 1, 0},
-    [WSG_CMD_TARE] = {"TareForceSensor", wsg_cmd_tare, 0, 0,
-                      WSG_CMDF_NO_PARAM},
-    [WSG_CMD_GET_SYSTEM_STATE] = {"GetSystemState", wsg_cmd_stream, 3, 3,
-                                  WSG_CMDF_EMPTY_OK},
-    [WSG_CMD_GET_GRASP_STATE] = {"GetGraspingState", wsg_cmd_stream, 3, 3,
-                                 WSG_CMDF_EMPTY_OK},
-    [WSG_CMD_GET_GRASP_STATS] = {"GetGraspingStatistics", wsg_cmd_grasp_stats,
-                                 1, 1, WSG_CMDF_EMPTY_OK},
-    [WSG_CMD_GET_WIDTH] = {"GetOpeningWidth", wsg_cmd_stream, 3, 3,
-                           WSG_CMDF_EMPTY_OK},
-    [WSG_CMD_GET_SPEED] = {"GetSpeed", wsg_cmd_stream, 3, 3,
-                           WSG_CMDF_EMPTY_OK},
-    [WSG_CMD_GET_FORCE] = {"GetForce", wsg_cmd_stream, 3, 3,
-                           WSG_CMDF_EMPTY_OK},
-    [WSG_CMD_GET_TEMPERATURE] = {"GetTemperature", wsg_cmd_temperature, 0, 0,
-                                 WSG_CMDF_NO_PARAM},
-    [WSG_CMD_GET_SYSTEM_INFO] = {"GetSystemInformation", wsg_cmd_system_info,
-                                 0, 0, WSG_CMDF_NO_PARAM},
-    /* Longer than 64 characters is E_OVERRUN, not a format error; trailing
-     * NULs do not count, so the whole payload range is the handler's. */
-    [WSG_CMD_SET_DEVICE_TAG] = {"SetDeviceTag", wsg_cmd_set_tag, 0,
-                                WSG_PAYLOAD_MAX, 0},
-    [WSG_CMD_GET_DEVICE_TAG] = {"GetDeviceTag", wsg_cmd_get_tag, 0, 0,
-                                WSG_CMDF_NO_PARAM},
-    [WSG_CMD_GET_SYSTEM_LIMITS] = {"GetSystemLimits", wsg_cmd_system_limits, 0,
-                                   0, WSG_CMDF_NO_PARAM},
-};
+    WSG_SCHEMA_COMMANDS(WSG_CMD_DESC_)};

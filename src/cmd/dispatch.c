@@ -6,21 +6,6 @@
  */
 #include "cmd.h"
 
-const char *wsg_cmd_name(uint8_t id)
-{
-    return wsg_cmd_table[id].name;
-}
-
-int wsg_cmd_request_fits(uint8_t id, size_t len)
-{
-    const struct wsg_cmd_desc *c = &wsg_cmd_table[id];
-
-    if (!c->handler)
-        return 0;
-    return (len >= c->min_len && len <= c->max_len) ||
-           (len == 0 && (c->flags & WSG_CMDF_EMPTY_OK));
-}
-
 static uint16_t wsg_cmd_check(const struct wsg_device *d,
                               const struct wsg_session *s,
                               const struct wsg_cmd_desc *c,
@@ -32,8 +17,7 @@ static uint16_t wsg_cmd_check(const struct wsg_device *d,
         return WSG_E_ACCESS_DENIED; /* 3.1.2: waiting for the close */
     if (!c->handler)
         return WSG_E_CMD_UNKNOWN;
-    if ((f->len < c->min_len || f->len > c->max_len) &&
-        !(f->len == 0 && (c->flags & WSG_CMDF_EMPTY_OK)))
+    if (!wsg_schema_len_ok(c->min_len, c->max_len, c->flags, f->len))
         return (c->flags & WSG_CMDF_NO_PARAM) ? WSG_E_NO_PARAM_EXPECTED
                                               : WSG_E_CMD_FORMAT_ERROR;
     if (c->flags & WSG_CMDF_MOTION) {

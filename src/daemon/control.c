@@ -330,32 +330,6 @@ static void cmd_time(struct wsg_ctl_client *c, int argc, char **argv)
              "time resume");
 }
 
-static const char *const flag_names[21] = {"referenced",
-                                           "moving",
-                                           "blocked_minus",
-                                           "blocked_plus",
-                                           "soft_limit_minus",
-                                           "soft_limit_plus",
-                                           "axis_stopped",
-                                           "target_pos_reached",
-                                           "overdrive_mode",
-                                           "force_control_mode",
-                                           NULL,
-                                           NULL,
-                                           "fast_stop",
-                                           "temp_warning",
-                                           "temp_fault",
-                                           "power_fault",
-                                           "current_fault",
-                                           "finger_fault",
-                                           "cmd_failure",
-                                           "script_running",
-                                           "script_failure"};
-
-static const char *const grasp_names[] = {
-    "idle",    "grasping",  "no_part",     "part_lost",
-    "holding", "releasing", "positioning", "error"};
-
 /* Appends to buf at *used; a reply that does not fit is cut, never
  * overrun (it cannot happen with these keys). */
 static void append(char *buf, size_t cap, size_t *used, const char *fmt, ...)
@@ -384,7 +358,7 @@ static void cmd_state(struct wsg_ctl_client *c, int argc, char **argv)
         wsg_axis_flags(ax) | (d->cmd_failure ? WSG_SF_CMD_FAILURE : 0u);
     unsigned gs = (unsigned)ax->grasp_state;
     char buf[WSG_CTL_REPLY_MAX - 8];
-    char t[32];
+    char t[32], key[32], gs_key[32];
     size_t used = 0;
     unsigned i;
     int first = 1;
@@ -395,24 +369,27 @@ static void cmd_state(struct wsg_ctl_client *c, int argc, char **argv)
            "\"temperature\":%.2f,\"flags\":%lu,\"flag_names\":[",
            ax->width, ax->speed, ax->force, ax->temperature,
            (unsigned long)flags);
-    for (i = 0; i < sizeof flag_names / sizeof flag_names[0]; i++) {
-        if (!(flags & (1u << i)) || !flag_names[i])
+    /* The manual's names in the channel's spelling ("fast_stop"). */
+    for (i = 0; i < 32; i++) {
+        if (!(flags & (1u << i)) || !wsg_system_flag_names[i])
             continue;
-        append(buf, sizeof buf, &used, "%s\"%s\"", first ? "" : ",",
-               flag_names[i]);
+        wsg_schema_key(wsg_system_flag_names[i], key, sizeof key);
+        append(buf, sizeof buf, &used, "%s\"%s\"", first ? "" : ",", key);
         first = 0;
     }
+    if (gs < WSG_GS_COUNT)
+        wsg_schema_key(wsg_grasp_state_names[gs], gs_key, sizeof gs_key);
+    else
+        strcpy(gs_key, "unknown");
     append(buf, sizeof buf, &used,
            "],\"grasp_state\":%u,\"grasp_state_name\":\"%s\","
            "\"stats\":{\"total\":%lu,\"no_part\":%u,\"lost_part\":%u},"
            "\"time\":%s,\"paused\":%s,\"scale\":%g,"
            "\"delayed\":%lu,\"delay_dropped\":%llu}",
-           gs,
-           gs < sizeof grasp_names / sizeof grasp_names[0] ? grasp_names[gs]
-                                                           : "unknown",
-           (unsigned long)ax->stats.total, (unsigned)ax->stats.no_part,
-           (unsigned)ax->stats.lost_part, t, l->paused ? "true" : "false",
-           l->scale, (unsigned long)wsg_gripper_delayed(g),
+           gs, gs_key, (unsigned long)ax->stats.total,
+           (unsigned)ax->stats.no_part, (unsigned)ax->stats.lost_part, t,
+           l->paused ? "true" : "false", l->scale,
+           (unsigned long)wsg_gripper_delayed(g),
            (unsigned long long)wsg_gripper_delay_dropped(g));
     reply(c, "ok %s", buf);
 }

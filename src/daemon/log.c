@@ -2,9 +2,11 @@
  * The communication log: formats one line per packet from the device's
  * trace hooks (see log.h for the line format). Received packets arrive
  * parsed (a struct wsg_frame, or a checksum or size error with the ID);
- * sent packets arrive as raw bytes and are taken apart here. Each line is
- * built in a stack buffer and handed to stdio in one call, so a line is
- * never split between two flushes.
+ * sent packets arrive as raw bytes and are taken apart here. Parameters
+ * are decoded by the schema's layout for the command (wsg/schema.h), so
+ * every field the schema knows is shown by name. Each line is built in a
+ * stack buffer and handed to stdio in one call, so a line is never split
+ * between two flushes.
  */
 #define _GNU_SOURCE /* localtime_r, clock_gettime */
 
@@ -87,250 +89,59 @@ static void put_hex2(struct line *l, uint8_t v)
     put(l, b, 2);
 }
 
-static void add_hex(struct line *l, const uint8_t *p, size_t n)
-{
-    size_t i;
+/* Values as the log writes them: "width=110.000", "flags=0x03(relative|
+ * stop-on-block)", "grasp-state=4(HOLDING)", "tag=\"lab-2\"". */
+static const struct wsg_value_style log_style = {3,   "(", "|",
+                                                 ")", 0,   WSG_LOG_HEX_MAX};
 
-    put_str(l, " data=");
-    for (i = 0; i < n && i < WSG_LOG_HEX_MAX; i++) {
-        if (i)
-            put(l, " ", 1);
-        put_hex2(l, p[i]);
+/* " name=value" of one field. */
+static void add_value(struct line *l, const struct wsg_value *v)
+{
+    put(l, " ", 1);
+    put_str(l, v->field->name);
+    put(l, "=", 1);
+    if (l->n < sizeof l->s - 1)
+        l->n +=
+            wsg_value_format(v, &log_style, l->s + l->n, sizeof l->s - l->n);
+}
+
+/* The fields of a payload by the schema's layout for it. One that does
+ * not fit (a length the dispatcher refuses, an unknown ID) is shown as
+ * hex: the log shows what was sent, not what was meant. */
+static void add_fields(struct line *l, const struct wsg_layout *layout,
+                       const uint8_t *p, size_t n)
+{
+    static const struct wsg_field raw = WSG_F_BYTES("data", WSG_FRAME_MAX);
+    struct wsg_value v[WSG_FIELDS_MAX];
+    int k = wsg_layout_decode(layout, p, n, v), i;
+
+    if (k < 0) {
+        memset(v, 0, sizeof v[0]);
+        v[0].field = &raw;
+        v[0].data = p;
+        v[0].len = n;
+        k = n ? 1 : 0;
     }
-    if (n > WSG_LOG_HEX_MAX)
-        add(l, " ...(%zu bytes)", n);
+    for (i = 0; i < k; i++)
+        add_value(l, &v[i]);
 }
 
-static void add_text(struct line *l, const char *name, const uint8_t *p,
-                     size_t n)
-{
-    size_t i;
-
-    add(l, " %s=\"", name);
-    for (i = 0; i < n; i++)
-        add(l, p[i] >= 0x20 && p[i] < 0x7F && p[i] != '"' ? "%c" : "\\x%02X",
-            p[i]);
-    add(l, "\"");
-}
-
-static void add_f32(struct line *l, const char *name, const uint8_t *p)
-{
-    add(l, " %s=%.3f", name, (double)wsg_get_f32(p));
-}
-
-static void add_flags(struct line *l, uint32_t flags)
-{
-    static const struct {
-        uint32_t bit;
-        const char *name;
-    } names[] = {{WSG_SF_REFERENCED, "REFERENCED"},
-                 {WSG_SF_MOVING, "MOVING"},
-                 {WSG_SF_BLOCKED_MINUS, "BLOCKED_MINUS"},
-                 {WSG_SF_BLOCKED_PLUS, "BLOCKED_PLUS"},
-                 {WSG_SF_SOFT_LIMIT_MINUS, "SOFT_LIMIT_MINUS"},
-                 {WSG_SF_SOFT_LIMIT_PLUS, "SOFT_LIMIT_PLUS"},
-                 {WSG_SF_AXIS_STOPPED, "AXIS_STOPPED"},
-                 {WSG_SF_TARGET_POS_REACHED, "TARGET_POS_REACHED"},
-                 {WSG_SF_OVERDRIVE_MODE, "OVERDRIVE_MODE"},
-                 {WSG_SF_FORCECNTL_MODE, "FORCECNTL_MODE"},
-                 {WSG_SF_FAST_STOP, "FAST_STOP"},
-                 {WSG_SF_TEMP_WARNING, "TEMP_WARNING"},
-                 {WSG_SF_TEMP_FAULT, "TEMP_FAULT"},
-                 {WSG_SF_POWER_FAULT, "POWER_FAULT"},
-                 {WSG_SF_CURR_FAULT, "CURR_FAULT"},
-                 {WSG_SF_FINGER_FAULT, "FINGER_FAULT"},
-                 {WSG_SF_CMD_FAILURE, "CMD_FAILURE"},
-                 {WSG_SF_SCRIPT_RUNNING, "SCRIPT_RUNNING"},
-                 {WSG_SF_SCRIPT_FAILURE, "SCRIPT_FAILURE"}};
-    size_t i;
-    int first = 1;
-
-    add(l, " flags=0x%08lX", (unsigned long)flags);
-    for (i = 0; i < sizeof names / sizeof names[0]; i++) {
-        if (flags & names[i].bit) {
-            add(l, "%s%s", first ? " (" : "|", names[i].name);
-            first = 0;
-        }
-    }
-    if (!first)
-        add(l, ")");
-}
-
-static const char *grasp_state_name(unsigned s)
-{
-    static const char *const names[] = {"IDLE",        "GRASPING", "NO_PART",
-                                        "PART_LOST",   "HOLDING",  "RELEASING",
-                                        "POSITIONING", "ERROR"};
-
-    return s < sizeof names / sizeof names[0] ? names[s] : "?";
-}
-
-/* Parameters of a request, by command. Lengths the dispatcher would refuse
- * fall back to hex: the log shows what was sent, not what was meant. */
 static void decode_in(struct line *l, uint8_t id, const uint8_t *p, size_t n)
 {
-    switch (id) {
-    case WSG_CMD_HOMING:
-        if (n != 1)
-            break;
-        add(l, " direction=%s",
-            p[0] == 0   ? "default"
-            : p[0] == 1 ? "positive"
-            : p[0] == 2 ? "negative"
-                        : "invalid");
-        return;
-    case WSG_CMD_PREPOSITION:
-        if (n != 9)
-            break;
-        add(l, " flags=0x%02X", p[0]);
-        if (p[0] & WSG_MOVE_RELATIVE)
-            add(l, "(relative)");
-        add_f32(l, "width", p + 1);
-        add_f32(l, "speed", p + 5);
-        if (p[0] & WSG_MOVE_STOP_ON_BLOCK)
-            add(l, " stop-on-block");
-        return;
-    case WSG_CMD_GRASP:
-    case WSG_CMD_RELEASE:
-        if (n != 8)
-            break;
-        add_f32(l, "width", p);
-        add_f32(l, "speed", p + 4);
-        return;
-    case WSG_CMD_SET_ACCELERATION:
-        if (n != 4)
-            break;
-        add_f32(l, "acceleration", p);
-        return;
-    case WSG_CMD_SET_FORCE_LIMIT:
-        if (n != 4)
-            break;
-        add_f32(l, "force", p);
-        return;
-    case WSG_CMD_SET_SOFT_LIMITS:
-        if (n != 8)
-            break;
-        add_f32(l, "minus", p);
-        add_f32(l, "plus", p + 4);
-        return;
-    case WSG_CMD_OVERDRIVE:
-        if (n != 1)
-            break;
-        add(l, " overdrive=%s", p[0] ? "on" : "off");
-        return;
-    case WSG_CMD_GET_SYSTEM_STATE:
-    case WSG_CMD_GET_GRASP_STATE:
-    case WSG_CMD_GET_WIDTH:
-    case WSG_CMD_GET_SPEED:
-    case WSG_CMD_GET_FORCE:
-        if (n != 3)
-            break;
-        add(l, " auto-update=%s%s period=%ums", p[0] & 1 ? "on" : "off",
-            p[0] & 2 ? " change-only" : "", (unsigned)wsg_get_u16(p + 1));
-        return;
-    case WSG_CMD_SET_DEVICE_TAG:
-        add_text(l, "tag", p, n);
-        return;
-    default:
-        break;
-    }
-    if (n)
-        add_hex(l, p, n);
+    add_fields(l, &wsg_schema[id].request, p, n);
 }
 
-/* Parameters of a reply (after its status), by command. */
+/* Parameters of a reply, after its status. */
 static void decode_out(struct line *l, uint8_t id, const uint8_t *p, size_t n)
 {
     if (n == 0)
         return; /* a status only: most errors, and every final result */
-    switch (id) {
-    case WSG_CMD_GET_ACCELERATION:
-        if (n != 4)
-            break;
-        add_f32(l, "acceleration", p);
-        return;
-    case WSG_CMD_GET_FORCE_LIMIT:
-        if (n != 4)
-            break;
-        add_f32(l, "force", p);
-        return;
-    case WSG_CMD_GET_SOFT_LIMITS:
-        if (n != 8)
-            break;
-        add_f32(l, "minus", p);
-        add_f32(l, "plus", p + 4);
-        return;
-    case WSG_CMD_GET_SYSTEM_STATE:
-        if (n != 4)
-            break;
-        add_flags(l, wsg_get_u32(p));
-        return;
-    case WSG_CMD_GET_GRASP_STATE:
-        if (n != 1)
-            break;
-        add(l, " state=%u(%s)", p[0], grasp_state_name(p[0]));
-        return;
-    case WSG_CMD_GET_GRASP_STATS:
-        if (n != 8)
-            break;
-        add(l, " total=%lu no-part=%u lost-part=%u",
-            (unsigned long)wsg_get_u32(p), (unsigned)wsg_get_u16(p + 4),
-            (unsigned)wsg_get_u16(p + 6));
-        return;
-    case WSG_CMD_GET_WIDTH:
-        if (n != 4)
-            break;
-        add_f32(l, "width", p);
-        return;
-    case WSG_CMD_GET_SPEED:
-        if (n != 4)
-            break;
-        add_f32(l, "speed", p);
-        return;
-    case WSG_CMD_GET_FORCE:
-        if (n != 4)
-            break;
-        add_f32(l, "force", p);
-        return;
-    case WSG_CMD_GET_TEMPERATURE:
-        if (n != 2)
-            break;
-        add(l, " temperature=%.1f", (int16_t)wsg_get_u16(p) / 10.0);
-        return;
-    case WSG_CMD_GET_SYSTEM_INFO: {
-        unsigned sw;
-
-        if (n != 8)
-            break;
-        sw = wsg_get_u16(p + 2);
-        /* The firmware is the one emulated; which emulator answered is
-         * worth a line in a bug report too. */
-        add(l,
-            " type=%u hwrev=%u swrev=%u.%u.%u serial=%lu emulator=wsgemu-%s",
-            p[0], p[1], sw >> 12, (sw >> 8) & 0xFu, (sw >> 4) & 0xFu,
-            (unsigned long)wsg_get_u32(p + 4), WSG_VERSION);
-        return;
-    }
-    case WSG_CMD_GET_DEVICE_TAG:
-        add_text(l, "tag", p, n);
-        return;
-    case WSG_CMD_GET_SYSTEM_LIMITS:
-        if (n != 32)
-            break;
-        add_f32(l, "stroke", p);
-        add_f32(l, "min-speed", p + 4);
-        add_f32(l, "max-speed", p + 8);
-        add_f32(l, "min-acc", p + 12);
-        add_f32(l, "max-acc", p + 16);
-        add_f32(l, "min-force", p + 20);
-        add_f32(l, "nom-force", p + 24);
-        add_f32(l, "ovr-force", p + 28);
-        return;
-    default:
-        break;
-    }
-    if (n)
-        add_hex(l, p, n);
+    add_fields(l, &wsg_schema[id].reply, p, n);
+    /* The firmware is the one emulated; which emulator answered is worth
+     * a line in a bug report too. */
+    if (id == WSG_CMD_GET_SYSTEM_INFO &&
+        wsg_layout_fits(&wsg_schema[id].reply, n))
+        add(l, " emulator=wsgemu-%s", WSG_VERSION);
 }
 
 /* Wall clock, simulated time, peer, direction, ID and name. */

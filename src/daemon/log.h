@@ -12,9 +12,11 @@
  * prefixed with the gripper's number: "#3 tcp 127.0.0.1:51234"), DIR "in" for
  * a packet the gripper received and "out" for one it sent, ID the command ID
  * as "20h", NAME the command's name ("Homing", "unknown" for an ID the
- * table lacks), STATUS a reply's status name (E_SUCCESS, ...). PARAMS are
- * decoded as name=value (floats with 3 decimals, flags by name) where the
- * command is known, else the raw payload as hex bytes "data=01 02 ...". A
+ * schema lacks), STATUS a reply's status name (E_SUCCESS, ...). PARAMS are
+ * decoded by the schema's layout for the command as name=value (floats
+ * with 3 decimals, bit vectors and enums with the names of their values:
+ * "flags=0x01(auto-update)", "grasp-state=4(HOLDING)") where the payload
+ * fits it, else the raw payload as hex bytes "data=01 02 ...". A
  * received packet with a bad checksum shows "checksum-error", one with a
  * SIZE too large "oversize", instead of its parameters.
  */

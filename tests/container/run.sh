@@ -251,8 +251,8 @@ if [ "$MODE" != rootfs ]; then
         out=$(timeout 30 podman exec wsgemu-ctest-fleet /usr/bin/wsgctl \
             --tcp 127.0.0.1:1002 --timeout 10 info) || fail "fleet: gripper 2"
         # Gripper i has serial number 1 + i.
-        grep -qx 'serial-number 3' <<<"$out" || fail "fleet: gripper 2 said: $out"
-        echo "  gripper 2: $(grep serial-number <<<"$out")"
+        grep -qx 'serial 3' <<<"$out" || fail "fleet: gripper 2 said: $out"
+        echo "  gripper 2: $(grep '^serial ' <<<"$out")"
         stop_container wsgemu-ctest-fleet
         ran="$ran run"
     elif [ "$MODE" = run ]; then

@@ -11,6 +11,8 @@
  * still there, dropped if it was closed), matched against the E_CMD_PENDING
  * answers given under that session's tag. Stream packets are recognised by
  * the phase they are sent in (the bench polls streams after each step).
+ * Which commands have final results or streams, and the parameters every
+ * successful answer must have, are the schema's (wsg/schema.h).
  *
  * The bench is one static object: libFuzzer runs one input at a time, and
  * fuzz_bench_begin resets all of it.
@@ -31,16 +33,6 @@
 #define FUZZ_END_STEPS 100000L
 /* Floating-point slack for limits the model clamps to. */
 #define FUZZ_EPS 1e-6
-
-/* Every flag Appendix B defines. */
-#define FUZZ_SF_KNOWN                                                         \
-    (WSG_SF_REFERENCED | WSG_SF_MOVING | WSG_SF_BLOCKED_MINUS |               \
-     WSG_SF_BLOCKED_PLUS | WSG_SF_SOFT_LIMIT_MINUS | WSG_SF_SOFT_LIMIT_PLUS | \
-     WSG_SF_AXIS_STOPPED | WSG_SF_TARGET_POS_REACHED |                        \
-     WSG_SF_OVERDRIVE_MODE | WSG_SF_FORCECNTL_MODE | WSG_SF_FAST_STOP |       \
-     WSG_SF_TEMP_WARNING | WSG_SF_TEMP_FAULT | WSG_SF_POWER_FAULT |           \
-     WSG_SF_CURR_FAULT | WSG_SF_FINGER_FAULT | WSG_SF_CMD_FAILURE |           \
-     WSG_SF_SCRIPT_RUNNING | WSG_SF_SCRIPT_FAILURE)
 
 /* abort() rather than assert(): the check must stay in every build type;
  * the message names the invariant, libFuzzer's stack trace the path. */
@@ -87,17 +79,22 @@ static struct {
     int trace;               /* FUZZ_TRACE set: print every event and packet */
 } B;
 
+/* What the schema says of the command: final results come only for
+ * asynchronous ones, stream packets only for those that stream. */
 static int fuzz_is_motion(uint8_t id)
 {
-    return id == WSG_CMD_HOMING || id == WSG_CMD_PREPOSITION ||
-           id == WSG_CMD_GRASP || id == WSG_CMD_RELEASE;
+    return (wsg_schema[id].flags & WSG_CMDF_ASYNC) != 0;
 }
 
 static int fuzz_is_stream(uint8_t id)
 {
-    return id == WSG_CMD_GET_SYSTEM_STATE || id == WSG_CMD_GET_GRASP_STATE ||
-           id == WSG_CMD_GET_WIDTH || id == WSG_CMD_GET_SPEED ||
-           id == WSG_CMD_GET_FORCE;
+    return (wsg_schema[id].flags & WSG_CMDF_STREAM) != 0;
+}
+
+/* Parameters are the reply layout of the ID. */
+static int fuzz_reply_fits(uint8_t id, size_t plen)
+{
+    return wsg_layout_fits(&wsg_schema[id].reply, plen);
 }
 
 /* Flag combinations the manual rules out, in any reported state word. */
@@ -105,7 +102,7 @@ static void fuzz_check_flags(uint32_t f)
 {
     const struct wsg_axis *ax = &B.dev.axis;
 
-    FUZZ_CHECK((f & ~(uint32_t)FUZZ_SF_KNOWN) == 0);
+    FUZZ_CHECK((f & ~(uint32_t)WSG_SF_ALL) == 0);
     /* FAST STOP halts the axis in the step that applies it. Between its
      * request and that step the flags already show it (they report what
      * the commands see) while the fingers still move. */
@@ -189,8 +186,11 @@ static void fuzz_answer(struct wsg_session *s, uint8_t id, uint16_t status,
         FUZZ_CHECK(fuzz_is_motion(id) && s->tag < FUZZ_TAGS);
         B.owed[s->tag]++;
     }
-    if (status == WSG_E_SUCCESS && id == WSG_CMD_GET_SYSTEM_STATE)
-        fuzz_check_flags(wsg_get_u32(params));
+    if (status == WSG_E_SUCCESS) {
+        FUZZ_CHECK(fuzz_reply_fits(id, plen));
+        if (id == WSG_CMD_GET_SYSTEM_STATE)
+            fuzz_check_flags(wsg_get_u32(params));
+    }
 }
 
 static void fuzz_send(struct wsg_session *s, const uint8_t *pkt, size_t len)
@@ -234,7 +234,7 @@ static void fuzz_send(struct wsg_session *s, const uint8_t *pkt, size_t len)
         break;
     case FUZZ_PH_STREAM:
         FUZZ_CHECK(fuzz_is_stream(id) && status == WSG_E_SUCCESS);
-        FUZZ_CHECK(plen == (id == WSG_CMD_GET_GRASP_STATE ? 1u : 4u));
+        FUZZ_CHECK(fuzz_reply_fits(id, plen));
         if (id == WSG_CMD_GET_SYSTEM_STATE)
             fuzz_check_flags(wsg_get_u32(pkt + 8));
         break;

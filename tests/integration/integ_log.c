@@ -2,10 +2,12 @@
  * integ_log: the communication log (--log FILE) as a user reads it.
  *
  * A client sends a Homing (pending, then its final result), a Loop, an
- * unknown ID, a Loop with a bad checksum and a Get Opening Width. The log
- * must show one line per packet in each direction with the peer, the
- * command names, the status names of the replies and decoded parameters
- * (the width as a float); lines appear in the file while the daemon runs
+ * unknown ID, a Loop with a bad checksum, a Get Opening Width, a Get System
+ * Information, a Get System State and a Get Grasping Statistics with its
+ * reset flag. The log must show one line per packet in each direction with
+ * the peer, the command names, the status names of the replies and the
+ * parameters decoded by the schema (the width as a float, flags and enums
+ * with the manual's names); lines appear in the file while the daemon runs
  * (it flushes after each batch of events), and all of them after it
  * stopped. Without --log no file is written, and a log that cannot be
  * opened is an error at start.
@@ -109,6 +111,12 @@ static void test_log(const char *dir)
     CHECK_EQ(
         emu_request(&c, WSG_CMD_GET_SYSTEM_INFO, NULL, 0, NULL, EMU_REPLY_MS),
         WSG_E_SUCCESS);
+    CHECK_EQ(
+        emu_request(&c, WSG_CMD_GET_SYSTEM_STATE, NULL, 0, NULL, EMU_REPLY_MS),
+        WSG_E_SUCCESS);
+    CHECK_EQ(emu_request(&c, WSG_CMD_GET_GRASP_STATS, "\x01", 1, NULL,
+                         EMU_REPLY_MS),
+             WSG_E_SUCCESS);
 
     /* Flushed after the batch that sent the reply: there while running.
      * The daemon may be descheduled between its send and the flush, so the
@@ -137,7 +145,7 @@ static void test_log(const char *dir)
     REQUIRE(emu_field(&e, "tcp", port, sizeof port) != NULL);
     snprintf(peer, sizeof peer, " tcp 127.0.0.1:");
     {
-        const char *const p1[] = {peer, " in 20h Homing direction=default",
+        const char *const p1[] = {peer, " in 20h Homing direction=0(default)",
                                   NULL};
         const char *const p2[] = {peer, " out 20h Homing E_CMD_PENDING", NULL};
         const char *const p3[] = {" out 20h Homing E_SUCCESS", NULL};
@@ -154,11 +162,22 @@ static void test_log(const char *dir)
         const char *const p11[] = {" in 43h GetOpeningWidth", NULL};
         /* The firmware emulated, and the emulator's own version. */
         const char *const p12[] = {" out 50h GetSystemInformation E_SUCCESS "
-                                   "type=1 hwrev=1 swrev=2.2.0 serial=1 "
+                                   "type=1(WSG 50) hwrev=1 swrev=2.2.0 "
+                                   "serial=1 "
                                    "emulator=wsgemu-" WSG_VERSION,
                                    NULL};
-        const char *const *all[] = {p1, p2, p3, p4,  p5,  p6,
-                                    p7, p8, p9, p10, p11, p12};
+        /* Flags and enums by the manual's names, bits of a request too. */
+        const char *const p13[] = {" out 40h GetSystemState E_SUCCESS "
+                                   "flags=0x00000001(SF_REFERENCED)",
+                                   NULL};
+        const char *const p14[] = {" in 42h GetGraspingStatistics "
+                                   "flags=0x01(reset)",
+                                   NULL};
+        const char *const p15[] = {" out 42h GetGraspingStatistics E_SUCCESS "
+                                   "total=0 no-part=0 lost-part=0",
+                                   NULL};
+        const char *const *all[] = {p1, p2,  p3,  p4,  p5,  p6,  p7, p8,
+                                    p9, p10, p11, p12, p13, p14, p15};
 
         for (size_t i = 0; i < sizeof all / sizeof all[0]; i++)
             expect(text, all[i]);

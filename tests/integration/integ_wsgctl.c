@@ -202,8 +202,11 @@ static void test_tcp(struct env *v)
     CHECK(has(v->err, "E_CMD_FAILED"));
     CHECK_EQ(TCP(v, "state"), 0);
     /* SF_CMD_FAILURE is gone: the 07h of the grasp's close succeeded. */
-    CHECK(has(v->out, "state 0x00000001 SF_REFERENCED\n"));
-    CHECK(has(v->out, "grasp 2 NO_PART"));
+    CHECK(has(v->out, "flags 0x00000001 (SF_REFERENCED)\n"));
+    CHECK(has(v->out, "grasp-state 2 (NO_PART)\n"));
+    /* Bare values: the flags in hex, the grasping state's number. */
+    CHECK_EQ(TCP(v, "-q", "state"), 0);
+    CHECK(!strcmp(v->out, "0x00000001\n2\n"));
     CHECK_EQ(TCP(v, "-q", "stats"), 0);
     CHECK(!strcmp(v->out, "1 1 0\n"));
 
@@ -211,17 +214,19 @@ static void test_tcp(struct env *v)
     CHECK_EQ(TCP(v, "width"), 0);
     CHECK(!strcmp(v->out, "width 60.00 mm\n"));
     CHECK_EQ(TCP(v, "state"), 0);
-    CHECK(
-        has(v->out, "state 0x00000081 SF_REFERENCED SF_TARGET_POS_REACHED\n"));
-    CHECK(has(v->out, "grasp 0 IDLE\n"));
+    CHECK(has(v->out,
+              "flags 0x00000081 (SF_REFERENCED SF_TARGET_POS_REACHED)\n"));
+    CHECK(has(v->out, "grasp-state 0 (IDLE)\n"));
     CHECK(!has(v->out, "SF_FAST_STOP"));
 
     CHECK_EQ(TCP(v, "info"), 0);
-    CHECK(has(v->out, "type 1 (WSG 50)") && has(v->out, "firmware 2.2.0"));
+    CHECK(
+        !strcmp(v->out, "type 1 (WSG 50)\nhwrev 1\nswrev 2.2.0\nserial 1\n"));
     CHECK_EQ(TCP(v, "-q", "info"), 0); /* TYPE HWREV FIRMWARE SN */
     CHECK(!strcmp(v->out, "1 1 2.2.0 1\n"));
     CHECK_EQ(TCP(v, "limits"), 0);
-    CHECK(has(v->out, "stroke 110.00 mm"));
+    CHECK(has(v->out, "stroke 110.00 mm\nmin-speed 5.00 mm/s\n"));
+    CHECK(has(v->out, "\novr-force 120.00 N\n"));
 
     CHECK_EQ(TCP(v, "tag"), 0);
     CHECK(!strcmp(v->out, "tag none\n"));
@@ -233,7 +238,7 @@ static void test_tcp(struct env *v)
     CHECK(!strcmp(v->out, "force-limit 30.00 N\n"));
     CHECK_EQ(TCP(v, "soft-limits", "5", "100"), 0);
     CHECK_EQ(TCP(v, "soft-limits"), 0);
-    CHECK(!strcmp(v->out, "soft-limits minus 5.00 mm plus 100.00 mm\n"));
+    CHECK(!strcmp(v->out, "limit-minus 5.00 mm\nlimit-plus 100.00 mm\n"));
     CHECK_EQ(TCP(v, "soft-limits", "clear"), 0);
     CHECK_EQ(TCP(v, "-q", "soft-limits"), 0);
     CHECK(!strcmp(v->out, "none\n"));
@@ -334,7 +339,7 @@ static void test_watch(struct env *v)
     }
     CHECK_EQ(TCP(v, "-q", "watch", "grasp", "--count", "2"), 0);
     CHECK_EQ(count_lines(v->out), 2);
-    CHECK(has(v->out, " IDLE\n"));
+    CHECK(has(v->out, " 0\n"));
     /* --count 010 is ten, not octal eight. */
     CHECK_EQ(TCP(v, "-q", "watch", "width", "10", "--count", "010"), 0);
     CHECK_EQ(count_lines(v->out), 10);
@@ -370,7 +375,7 @@ static void test_udp_pty(struct env *v)
     CHECK(!strcmp(v->out, "70.00\n"));
     CHECK_EQ(ctl(v, "--serial", v->pty, "move", "30", "200", (char *)NULL), 0);
     CHECK_EQ(ctl(v, "--serial", v->pty, "info", (char *)NULL), 0);
-    CHECK(has(v->out, "firmware 2.2.0"));
+    CHECK(has(v->out, "swrev 2.2.0"));
     CHECK_EQ(TCP(v, "-q", "width"), 0);
     CHECK(!strcmp(v->out, "30.00\n"));
 }
@@ -397,7 +402,8 @@ static void test_control_read(struct env *v, struct emu *e)
     REQUIRE(emu_request(&c, WSG_CMD_PREPOSITION, p, n, NULL, EMU_REPLY_MS) ==
             WSG_E_CMD_PENDING);
     CHECK_EQ(ctl(v, "--control", addr, "state", (char *)NULL), 0);
-    CHECK(has(v->out, "SF_MOVING") && has(v->out, "grasp 6 POSITIONING"));
+    CHECK(has(v->out, "SF_MOVING") &&
+          has(v->out, "grasp-state 6 (POSITIONING)"));
     CHECK_EQ(ctl(v, "--control", addr, "-q", "width", (char *)NULL), 0);
     CHECK(atof(v->out) > 5.0 && atof(v->out) <= 60.0);
     CHECK_EQ(ctl(v, "--control", addr, "-q", "stats", (char *)NULL), 0);
