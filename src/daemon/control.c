@@ -1,8 +1,9 @@
 /*
  * The control channel: a listening TCP socket and up to WSG_CTL_CLIENTS_MAX
- * clients, each with a line buffer and a bounded output queue (the same
- * wsg_outq the gripper's TCP port uses, so a client that stops reading is
- * dropped instead of blocking the loop).
+ * clients, each with a line buffer. The clients are a set of stream peers
+ * (peer.h), as the gripper's TCP connections are: each has a bounded output
+ * queue, so a client that stops reading is dropped instead of blocking the
+ * loop.
  *
  * Commands act at once, between the loop's model steps: the world setters
  * change what the model sees and the model is settled before the answer
@@ -12,8 +13,8 @@
  * synchronously before answering, so a test in lockstep knows that every
  * packet the steps caused was sent before the "ok".
  *
- * Like the TCP port, a client that ends is only marked during the event
- * batch and freed by settle.
+ * Like the TCP port's, a client that ends is only marked during the event
+ * batch and freed by the reap after it (a hook on the reactor).
  */
 #define _GNU_SOURCE
 
@@ -33,7 +34,7 @@
 #include <unistd.h>
 
 #include "gripper.h"
-#include "outq.h"
+#include "peer.h"
 
 #define WSG_CTL_READ_CHUNK 1024u
 #define WSG_CTL_REPLY_MAX  2048u
@@ -44,16 +45,12 @@
 struct wsg_ctl;
 
 struct wsg_ctl_client {
-    struct wsg_watch watch; /* first: epoll hands back &watch */
     struct wsg_ctl *ctl;
-    unsigned slot;
-    int dead;
     int overlong;     /* discarding the rest of a too long line */
     unsigned gripper; /* the gripper this client's commands act on */
-    uint32_t events;
     size_t len;
     char line[WSG_CTL_LINE_MAX + 1];
-    struct wsg_outq out; /* last: its buffer needs no initial value */
+    struct wsg_peer peer; /* last: the set allocates the struct around it */
 };
 
 struct wsg_ctl {
@@ -61,46 +58,13 @@ struct wsg_ctl {
     struct wsg_reactor *reactor;
     struct wsg_sched *sched;
     struct wsg_gripper *cur; /* the line being run acts on this one */
-    unsigned nclients;
-    unsigned ndead;
     char local[WSG_ADDR_LEN];
-    struct wsg_ctl_client *clients[WSG_CTL_CLIENTS_MAX];
+    struct wsg_peer_set clients;
 };
 
-static void client_kill(struct wsg_ctl_client *c, const char *why)
+static struct wsg_ctl_client *client_of(struct wsg_peer *p)
 {
-    if (c->dead)
-        return;
-    c->dead = 1;
-    c->ctl->ndead++;
-    if (why)
-        fprintf(stderr, "wsgemu: control: closing a client: %s\n", why);
-}
-
-static void client_set_events(struct wsg_ctl_client *c, uint32_t events)
-{
-    int r;
-
-    if (c->events == events)
-        return;
-    r = wsg_reactor_mod(c->ctl->reactor, &c->watch, events);
-    if (r < 0) {
-        client_kill(c, strerror(-r));
-        return;
-    }
-    c->events = events;
-}
-
-static void client_sent(struct wsg_ctl_client *c, int r)
-{
-    if (r == -ENOBUFS)
-        client_kill(c, "output queue over 64 KiB (client not reading)");
-    else if (r < 0)
-        client_kill(c, r == -EPIPE || r == -ECONNRESET ? NULL : strerror(-r));
-    else if (r)
-        client_set_events(c, c->events | EPOLLOUT);
-    else
-        client_set_events(c, c->events & ~(uint32_t)EPOLLOUT);
+    return WSG_PEER_OWNER(p, struct wsg_ctl_client, peer);
 }
 
 /* One answer line; the newline is added here. */
@@ -110,7 +74,7 @@ static void reply(struct wsg_ctl_client *c, const char *fmt, ...)
     va_list ap;
     int n;
 
-    if (c->dead)
+    if (c->peer.dead)
         return;
     va_start(ap, fmt);
     n = vsnprintf(buf, sizeof buf - 1, fmt, ap);
@@ -120,8 +84,7 @@ static void reply(struct wsg_ctl_client *c, const char *fmt, ...)
     if ((size_t)n > sizeof buf - 2)
         n = (int)(sizeof buf - 2);
     buf[n++] = '\n';
-    client_sent(c, wsg_outq_send(&c->out, c->watch.fd, (const uint8_t *)buf,
-                                 (size_t)n));
+    wsg_peer_send(&c->peer, (const uint8_t *)buf, (size_t)n);
 }
 
 /* ---- arguments ---- */
@@ -560,7 +523,7 @@ static void client_input(struct wsg_ctl_client *c, const char *data, size_t n)
 {
     size_t i;
 
-    for (i = 0; i < n && !c->dead; i++) {
+    for (i = 0; i < n && !c->peer.dead; i++) {
         char ch = data[i];
 
         if (ch == '\n') {
@@ -588,39 +551,40 @@ static void client_read(struct wsg_ctl_client *c)
     char buf[WSG_CTL_READ_CHUNK];
     ssize_t n;
 
-    n = recv(c->watch.fd, buf, sizeof buf, MSG_DONTWAIT);
+    n = recv(c->peer.watch.fd, buf, sizeof buf, MSG_DONTWAIT);
     if (n > 0) {
         client_input(c, buf, (size_t)n);
         return;
     }
     if (n == 0) {
-        client_kill(c, NULL);
+        wsg_peer_kill(&c->peer, NULL);
         return;
     }
     if (errno == EINTR || errno == EAGAIN || errno == EWOULDBLOCK)
         return;
-    client_kill(c, errno == ECONNRESET ? NULL : strerror(errno));
+    wsg_peer_kill(&c->peer, errno == ECONNRESET ? NULL : strerror(errno));
 }
 
-static void client_free(struct wsg_ctl *ctl, struct wsg_ctl_client *c)
+static void client_event(struct wsg_watch *w, uint32_t events)
 {
-    wsg_reactor_del(ctl->reactor, &c->watch);
-    close(c->watch.fd);
-    ctl->clients[c->slot] = NULL;
-    ctl->nclients--;
-    if (c->dead)
-        ctl->ndead--;
-    free(c);
+    struct wsg_peer *p = (struct wsg_peer *)w;
+
+    /* Lines that came before a close are still answered (as far as the
+     * peer still reads): "printf 'drop\n' | nc" must work. */
+    if (wsg_peer_ready(p, events))
+        client_read(client_of(p));
 }
 
-static void client_event(struct wsg_watch *w, uint32_t events);
+static void client_watch(struct wsg_watch *w, int fd, void *ctx)
+{
+    wsg_watch_init(w, fd, client_event, ctx);
+}
 
 static void on_listen(struct wsg_watch *w, uint32_t events)
 {
     struct wsg_ctl *ctl = w->ctx;
     static const char full[] = "error too many control clients\n";
-    struct wsg_ctl_client *c;
-    unsigned slot;
+    struct wsg_peer *p;
     int fd;
     int r;
 
@@ -628,62 +592,29 @@ static void on_listen(struct wsg_watch *w, uint32_t events)
     fd = accept4(ctl->watch.fd, NULL, NULL, SOCK_NONBLOCK | SOCK_CLOEXEC);
     if (fd < 0)
         return; /* EAGAIN, or a pending connection that failed */
-    for (slot = 0; slot < WSG_CTL_CLIENTS_MAX; slot++)
-        if (!ctl->clients[slot])
-            break;
-    if (slot == WSG_CTL_CLIENTS_MAX) {
+    if (wsg_peer_full(&ctl->clients)) {
         /* Told why, rather than left to guess from a bare close. */
         if (send(fd, full, sizeof full - 1, MSG_NOSIGNAL) < 0)
             (void)0;
         close(fd);
         return;
     }
-    c = malloc(sizeof *c);
-    if (!c) {
-        close(fd);
-        return;
-    }
-    memset(c, 0, offsetof(struct wsg_ctl_client, out));
-    wsg_outq_init(&c->out, 1);
-    wsg_watch_init(&c->watch, fd, client_event, c);
-    c->ctl = ctl;
-    c->slot = slot;
-    c->events = EPOLLIN | EPOLLRDHUP;
-    r = wsg_reactor_add(ctl->reactor, &c->watch, c->events);
+    r = wsg_peer_open(&ctl->clients, fd, NULL, &p);
     if (r < 0) {
         fprintf(stderr, "wsgemu: control: refused a client: %s\n",
                 strerror(-r));
         close(fd);
-        free(c);
         return;
     }
-    ctl->clients[slot] = c;
-    ctl->nclients++;
-}
-
-static void client_event(struct wsg_watch *w, uint32_t events)
-{
-    struct wsg_ctl_client *c = w->ctx;
-
-    if (c->dead)
-        return;
-    if (events & EPOLLOUT)
-        client_sent(c, wsg_outq_flush(&c->out, c->watch.fd));
-    /* Lines that came before a close are still answered (as far as the
-     * peer still reads): "printf 'drop\n' | nc" must work. */
-    if (!c->dead && (events & (EPOLLIN | EPOLLRDHUP | EPOLLHUP | EPOLLERR)))
-        client_read(c);
+    client_of(p)->ctl = ctl;
 }
 
 /* After each batch: free the clients that ended during it. */
 static void ctl_reap(void *ctx)
 {
     struct wsg_ctl *ctl = ctx;
-    unsigned i;
 
-    for (i = 0; i < WSG_CTL_CLIENTS_MAX && ctl->ndead > 0; i++)
-        if (ctl->clients[i] && ctl->clients[i]->dead)
-            client_free(ctl, ctl->clients[i]);
+    wsg_peer_reap(&ctl->clients);
 }
 
 int wsg_control_describe(const struct wsg_ctl *ctl, char *buf, size_t len)
@@ -695,14 +626,10 @@ int wsg_control_describe(const struct wsg_ctl *ctl, char *buf, size_t len)
 
 void wsg_control_close(struct wsg_ctl *ctl)
 {
-    unsigned i;
-
     if (!ctl)
         return;
     wsg_reactor_forget(ctl->reactor, ctl_reap, ctl);
-    for (i = 0; i < WSG_CTL_CLIENTS_MAX; i++)
-        if (ctl->clients[i])
-            client_free(ctl, ctl->clients[i]);
+    wsg_peer_set_fini(&ctl->clients);
     if (ctl->watch.fd >= 0) {
         wsg_reactor_del(ctl->reactor, &ctl->watch);
         close(ctl->watch.fd);
@@ -715,6 +642,16 @@ int wsg_control_open(struct wsg_ctl **out, struct wsg_reactor *reactor,
                      char *err, size_t errlen)
 {
     struct wsg_ctl *ctl = calloc(1, sizeof *ctl);
+    /* No generations (no sessions to tell apart), and a client dropped
+     * for not reading is closed with a FIN, not reset. */
+    const struct wsg_peer_config clients = {
+        .size = sizeof(struct wsg_ctl_client),
+        .offset = offsetof(struct wsg_ctl_client, peer),
+        .max = WSG_CTL_CLIENTS_MAX,
+        .log = "wsgemu: control: closing a client",
+        .watch = client_watch,
+        .ctx = ctl,
+    };
     int r;
 
     *out = NULL;
@@ -725,6 +662,7 @@ int wsg_control_open(struct wsg_ctl **out, struct wsg_reactor *reactor,
     }
     ctl->reactor = reactor;
     ctl->sched = sched;
+    wsg_peer_set_init(&ctl->clients, reactor, &clients);
     r = wsg_transport_listen_tcp(ep, (int)WSG_CTL_CLIENTS_MAX, "control",
                                  ctl->local, sizeof ctl->local, err, errlen);
     if (r < 0)

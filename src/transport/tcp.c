@@ -1,7 +1,10 @@
 /*
  * The TCP interface (the real gripper's port 1000): a listening socket and
- * up to WSG_TCP_CONN_MAX connections, each with its own parser, session and
- * bounded output queue.
+ * up to WSG_TCP_CONN_MAX connections, each with its own parser and session.
+ * The connections are a set of stream peers (peer.h), which keeps their
+ * slots, generations, bounded output queues, closes and reaping; this file
+ * accepts them, reads their packets into the device and ties each peer's
+ * end to its session.
  *
  * Drivers read a reply with a single recv(), so every packet leaves in one
  * send() whenever the socket takes it whole. When it does not, the rest and
@@ -21,8 +24,9 @@
  *
  * A connection that ends (EOF, error, dropped) is only marked during the
  * event batch, because the device may be in the middle of a call that sends
- * to it and later events of the batch may name it; settle then reports it to
- * the device (the FAST STOP rule) and frees it.
+ * to it and later events of the batch may name it; the reap after the batch
+ * then reports it to the device (the FAST STOP rule) and frees it. A client
+ * dropped for not reading is reset rather than sent a FIN (peer.c says why).
  *
  * Tags: transport base | generation << 8 | slot. The slot makes lookup
  * O(1); the generation, counted per accepted connection, keeps a slot's
@@ -42,9 +46,10 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
-#include "outq.h"
+#include "peer.h"
 #include "transport.h"
 
+/* 256 slots, all a peer set has (WSG_PEER_MAX). */
 #define WSG_TCP_SLOT_BITS         8
 #define WSG_TCP_CONN_MAX          (1u << WSG_TCP_SLOT_BITS)
 #define WSG_TCP_SLOT_MASK         (WSG_TCP_CONN_MAX - 1u)
@@ -59,20 +64,13 @@
 struct wsg_tcp;
 
 struct wsg_tcp_conn {
-    struct wsg_watch watch; /* first: epoll hands back &watch */
     struct wsg_tcp *tcp;
-    unsigned slot;
-    int dead;
-    /* Dropped for not reading: closed with a reset (see conn_free). */
-    int reset;
     /* The device already knows it is gone (the control channel's drop
      * tells it at once, before the close that follows the batch). */
     int reported;
-    uint32_t events; /* as registered with epoll */
-    char peer[WSG_ADDR_LEN];
     struct wsg_parser parser;
     struct wsg_session session;
-    struct wsg_outq out; /* last: its buffer needs no initial value */
+    struct wsg_peer peer; /* last: the set allocates the struct around it */
 };
 
 struct wsg_tcp {
@@ -85,41 +83,16 @@ struct wsg_tcp {
     /* Held to be given up when accept hits EMFILE, so the pending
      * connection can be taken and closed instead of waking us forever. */
     int spare_fd;
-    uint32_t next_gen;
-    unsigned max_clients;
     /* Refused since the last time a connection ended: only the first of a
      * burst is logged, so a connection storm cannot flood stderr. */
     unsigned refused;
-    unsigned nconns;
-    unsigned ndead;
     char local[WSG_ADDR_LEN];
-    struct wsg_tcp_conn *slots[WSG_TCP_CONN_MAX];
+    struct wsg_peer_set conns; /* at most --max-clients */
 };
 
-static void conn_kill(struct wsg_tcp_conn *c, const char *why)
+static struct wsg_tcp_conn *conn_of(struct wsg_peer *p)
 {
-    if (c->dead)
-        return;
-    c->dead = 1;
-    c->tcp->ndead++;
-    /* Settled after the batch, also when a step's send ended it. */
-    wsg_transport_defer(c->tcp->t);
-    if (why)
-        fprintf(stderr, "wsgemu: tcp %s: closing: %s\n", c->peer, why);
-}
-
-static void conn_set_events(struct wsg_tcp_conn *c, uint32_t events)
-{
-    int r;
-
-    if (c->events == events)
-        return;
-    r = wsg_reactor_mod(c->tcp->reactor, &c->watch, events);
-    if (r < 0) {
-        conn_kill(c, strerror(-r));
-        return;
-    }
-    c->events = events;
+    return WSG_PEER_OWNER(p, struct wsg_tcp_conn, peer);
 }
 
 static int send_errno_is_peer_gone(int e)
@@ -128,39 +101,12 @@ static int send_errno_is_peer_gone(int e)
            e == EHOSTUNREACH || e == ENETUNREACH;
 }
 
-static void conn_send_failed(struct wsg_tcp_conn *c, int err)
-{
-    conn_kill(c, send_errno_is_peer_gone(err) ? NULL : strerror(err));
-}
-
-/* After a send or a flush: watch EPOLLOUT while bytes wait; a client whose
- * queue overflows is dropped rather than slowing anyone else down. */
-static void conn_sent(struct wsg_tcp_conn *c, int r)
-{
-    if (r == -ENOBUFS) {
-        c->reset = 1;
-        conn_kill(c, "output queue over 64 KiB (client not reading)");
-    } else if (r < 0)
-        conn_send_failed(c, -r);
-    else if (r)
-        conn_set_events(c, c->events | EPOLLOUT);
-    else
-        conn_set_events(c, c->events & ~(uint32_t)EPOLLOUT);
-}
-
 /* The session's send callback: one packet. */
 static void conn_packet(struct wsg_session *s, const uint8_t *pkt, size_t len)
 {
     struct wsg_tcp_conn *c = s->ctx;
 
-    if (!c->dead)
-        conn_sent(c, wsg_outq_send(&c->out, c->watch.fd, pkt, len));
-}
-
-static void conn_flush(struct wsg_tcp_conn *c)
-{
-    if (!c->dead)
-        conn_sent(c, wsg_outq_flush(&c->out, c->watch.fd));
+    wsg_peer_send(&c->peer, pkt, len);
 }
 
 static void conn_read(struct wsg_tcp_conn *c)
@@ -170,8 +116,8 @@ static void conn_read(struct wsg_tcp_conn *c)
 
     /* Bounded, so one busy client cannot starve the others or the model's
      * steps; the level-triggered watch brings us back for the rest. */
-    for (i = 0; i < WSG_TCP_READS_PER_EVENT && !c->dead; i++) {
-        ssize_t n = recv(c->watch.fd, buf, sizeof buf, MSG_DONTWAIT);
+    for (i = 0; i < WSG_TCP_READS_PER_EVENT && !c->peer.dead; i++) {
+        ssize_t n = recv(c->peer.watch.fd, buf, sizeof buf, MSG_DONTWAIT);
 
         if (n > 0) {
             wsg_device_input(c->tcp->dev, &c->session, &c->parser, buf,
@@ -181,70 +127,52 @@ static void conn_read(struct wsg_tcp_conn *c)
             continue;
         }
         if (n == 0) {
-            conn_kill(c, NULL);
+            wsg_peer_kill(&c->peer, NULL);
             return;
         }
         if (errno == EINTR)
             continue;
         if (errno == EAGAIN || errno == EWOULDBLOCK)
             return;
-        conn_kill(c, errno == ECONNRESET || errno == ETIMEDOUT
-                         ? NULL
-                         : strerror(errno));
+        wsg_peer_kill(&c->peer, errno == ECONNRESET || errno == ETIMEDOUT
+                                    ? NULL
+                                    : strerror(errno));
         return;
     }
 }
 
-static void conn_free(struct wsg_tcp *tcp, struct wsg_tcp_conn *c)
+/* A connection about to be freed (reaped, or the transport closed): the
+ * device hears of it while the session still exists, unless it already
+ * has, and there is room again, so the next refusal starts a burst. */
+static void conn_closed(struct wsg_peer *p, void *ctx)
 {
-    wsg_reactor_del(tcp->reactor, &c->watch);
-    if (c->reset) {
-        /* A plain close would queue the FIN behind the output the client
-         * does not read: it would never learn that it was dropped, and
-         * the kernel would keep that output for an orphaned socket until
-         * its retries run out. Linger 0 resets at once and frees it. */
-        struct linger lg = {1, 0};
+    struct wsg_tcp *tcp = ctx;
+    struct wsg_tcp_conn *c = conn_of(p);
 
-        setsockopt(c->watch.fd, SOL_SOCKET, SO_LINGER, &lg, sizeof lg);
-    }
-    close(c->watch.fd);
-    tcp->slots[c->slot] = NULL;
-    tcp->nconns--;
-    tcp->refused = 0; /* room again: the next refusal starts a burst */
-    if (c->dead)
-        tcp->ndead--;
-    free(c);
-}
-
-/* Report the close to the device while the session still exists, then make
- * it unreachable. */
-static void conn_close(struct wsg_tcp *tcp, struct wsg_tcp_conn *c)
-{
-    if (!c->dead) {
-        c->dead = 1;
-        tcp->ndead++;
-    }
     if (!c->reported)
         wsg_device_session_closed(tcp->dev, &c->session);
-    conn_free(tcp, c);
+    tcp->refused = 0;
 }
 
-static int free_slot(const struct wsg_tcp *tcp)
+static void conn_watch(struct wsg_watch *w, int fd, void *ctx)
 {
-    unsigned i;
+    struct wsg_tcp *tcp = ctx;
 
-    for (i = 0; i < WSG_TCP_CONN_MAX; i++)
-        if (!tcp->slots[i])
-            return (int)i;
-    return -1;
+    wsg_transport_watch_init(tcp->t, w, fd);
 }
 
-static uint32_t next_tag(struct wsg_tcp *tcp, unsigned slot)
+/* A connection marked gone, also from within a step's send: settled after
+ * the batch. */
+static void conn_defer(void *ctx)
 {
-    uint32_t gen = tcp->next_gen;
+    struct wsg_tcp *tcp = ctx;
 
-    tcp->next_gen = (gen + 1) & WSG_TCP_GEN_MASK;
-    return tcp->tag_base | gen << WSG_TCP_SLOT_BITS | slot;
+    wsg_transport_defer(tcp->t);
+}
+
+static uint32_t conn_tag(const struct wsg_tcp *tcp, const struct wsg_peer *p)
+{
+    return tcp->tag_base | p->gen << WSG_TCP_SLOT_BITS | p->slot;
 }
 
 static void accept_overflow(struct wsg_tcp *tcp, int err)
@@ -263,18 +191,17 @@ static void accept_overflow(struct wsg_tcp *tcp, int err)
 }
 
 static void conn_accept(struct wsg_tcp *tcp, int fd,
-                        const struct sockaddr_in *peer)
+                        const struct sockaddr_in *addr)
 {
     struct wsg_tcp_conn *c;
+    struct wsg_peer *p;
     char name[WSG_ADDR_LEN];
     int one = 1;
     int sndbuf = WSG_TCP_SNDBUF;
-    int slot;
     int r;
 
-    wsg_transport_format_addr(name, sizeof name, peer);
-    slot = tcp->nconns < tcp->max_clients ? free_slot(tcp) : -1;
-    if (slot < 0) {
+    wsg_transport_format_addr(name, sizeof name, addr);
+    if (wsg_peer_full(&tcp->conns)) {
         /* Accepted only to be closed at once: the client sees a clean
          * refusal instead of hanging in the backlog. Dead connections
          * still count: their slots are freed at the end of the batch. */
@@ -283,20 +210,16 @@ static void conn_accept(struct wsg_tcp *tcp, int fd,
                     "wsgemu: tcp %s: refused: %u connections open "
                     "(--max-clients); further refusals are not logged "
                     "until one ends\n",
-                    name, tcp->nconns);
+                    name, tcp->conns.n);
         close(fd);
         return;
     }
-    /* The queue is the bulk of the struct and needs no initial value. */
-    c = malloc(sizeof *c);
-    if (!c) {
-        fprintf(stderr, "wsgemu: tcp %s: refused: %s\n", name,
-                strerror(ENOMEM));
+    r = wsg_peer_open(&tcp->conns, fd, name, &p);
+    if (r < 0) {
+        fprintf(stderr, "wsgemu: tcp %s: refused: %s\n", name, strerror(-r));
         close(fd);
         return;
     }
-    memset(c, 0, offsetof(struct wsg_tcp_conn, out));
-    wsg_outq_init(&c->out, 1);
     /* Small replies must leave at once, not wait for Nagle. */
     if (setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one) < 0)
         fprintf(stderr, "wsgemu: tcp %s: TCP_NODELAY: %s\n", name,
@@ -304,25 +227,13 @@ static void conn_accept(struct wsg_tcp *tcp, int fd,
     if (setsockopt(fd, SOL_SOCKET, SO_SNDBUF, &sndbuf, sizeof sndbuf) < 0)
         fprintf(stderr, "wsgemu: tcp %s: SO_SNDBUF: %s\n", name,
                 strerror(errno));
-    wsg_transport_watch_init(tcp->t, &c->watch, fd);
+    c = conn_of(p);
     c->tcp = tcp;
-    c->slot = (unsigned)slot;
-    c->events = EPOLLIN | EPOLLRDHUP;
-    memcpy(c->peer, name, sizeof name);
-    r = wsg_reactor_add(tcp->reactor, &c->watch, c->events);
-    if (r < 0) {
-        fprintf(stderr, "wsgemu: tcp %s: refused: %s\n", name, strerror(-r));
-        close(fd);
-        free(c);
-        return;
-    }
     wsg_parser_init(&c->parser, tcp->check_crc);
-    wsg_session_init(&c->session, next_tag(tcp, (unsigned)slot),
-                     WSG_SESSION_CONNECTION, conn_packet, c);
+    wsg_session_init(&c->session, conn_tag(tcp, p), WSG_SESSION_CONNECTION,
+                     conn_packet, c);
     /* For the communication log. */
-    snprintf(c->session.peer, sizeof c->session.peer, "tcp %s", c->peer);
-    tcp->slots[slot] = c;
-    tcp->nconns++;
+    snprintf(c->session.peer, sizeof c->session.peer, "tcp %s", p->name);
 }
 
 static void on_listen(struct wsg_tcp *tcp)
@@ -354,45 +265,34 @@ static void tcp_handle(struct wsg_transport *t, struct wsg_watch *w,
                        uint32_t events)
 {
     struct wsg_tcp *tcp = t->state;
-    struct wsg_tcp_conn *c;
+    struct wsg_peer *p;
 
     if (w == &tcp->watch) {
         on_listen(tcp);
         return;
     }
-    c = (struct wsg_tcp_conn *)w;
-    if (c->dead)
-        return;
-    /* Queued output first: new replies belong behind it. */
-    if (events & EPOLLOUT)
-        conn_flush(c);
+    p = (struct wsg_peer *)w;
     /* HUP and ERR are read too: data that came before the close (a 07h
      * Disconnect Announcement) must count, and recv reports the error. */
-    if (events & (EPOLLIN | EPOLLRDHUP | EPOLLHUP | EPOLLERR))
-        conn_read(c);
+    if (wsg_peer_ready(p, events))
+        conn_read(conn_of(p));
 }
 
 static struct wsg_session *tcp_lookup(struct wsg_transport *t, uint32_t tag)
 {
     struct wsg_tcp *tcp = t->state;
-    struct wsg_tcp_conn *c = tcp->slots[tag & WSG_TCP_SLOT_MASK];
+    struct wsg_peer *p = wsg_peer_live(&tcp->conns, tag & WSG_TCP_SLOT_MASK);
 
-    if (!c || c->dead || c->session.tag != tag)
+    if (!p || conn_tag(tcp, p) != tag)
         return NULL;
-    return &c->session;
+    return &conn_of(p)->session;
 }
 
 static void tcp_reap(struct wsg_transport *t)
 {
     struct wsg_tcp *tcp = t->state;
-    unsigned i;
 
-    for (i = 0; i < WSG_TCP_CONN_MAX && tcp->ndead > 0; i++) {
-        struct wsg_tcp_conn *c = tcp->slots[i];
-
-        if (c && c->dead)
-            conn_close(tcp, c);
-    }
+    wsg_peer_reap(&tcp->conns);
 }
 
 static unsigned tcp_drop_all(struct wsg_transport *t)
@@ -400,18 +300,18 @@ static unsigned tcp_drop_all(struct wsg_transport *t)
     struct wsg_tcp *tcp = t->state;
     unsigned i, n = 0;
 
-    for (i = 0; i < WSG_TCP_CONN_MAX; i++) {
-        struct wsg_tcp_conn *c = tcp->slots[i];
+    for (i = 0; i < tcp->conns.cfg.max; i++) {
+        struct wsg_peer *p = wsg_peer_live(&tcp->conns, i);
 
-        if (c && !c->dead) {
-            conn_kill(c, "dropped by the control channel");
-            /* Its consequences (FAST STOP unless it announced the close)
-             * are there when the control channel answers, not only after
-             * the batch, when the socket is closed. */
-            wsg_device_session_closed(tcp->dev, &c->session);
-            c->reported = 1;
-            n++;
-        }
+        if (!p)
+            continue;
+        wsg_peer_kill(p, "dropped by the control channel");
+        /* Its consequences (FAST STOP unless it announced the close) are
+         * there when the control channel answers, not only after the
+         * batch, when the socket is closed. */
+        wsg_device_session_closed(tcp->dev, &conn_of(p)->session);
+        conn_of(p)->reported = 1;
+        n++;
     }
     return n;
 }
@@ -427,13 +327,10 @@ static int tcp_describe(const struct wsg_transport *t, char *buf, size_t len)
 static void tcp_close(struct wsg_transport *t)
 {
     struct wsg_tcp *tcp = t->state;
-    unsigned i;
 
     if (!tcp)
         return;
-    for (i = 0; i < WSG_TCP_CONN_MAX; i++)
-        if (tcp->slots[i])
-            conn_close(tcp, tcp->slots[i]);
+    wsg_peer_set_fini(&tcp->conns);
     if (tcp->watch.fd >= 0) {
         wsg_reactor_del(tcp->reactor, &tcp->watch);
         close(tcp->watch.fd);
@@ -450,6 +347,19 @@ static int tcp_open(struct wsg_transport *t,
 {
     const struct wsg_tcp_config *cfg = config;
     struct wsg_tcp *tcp = calloc(1, sizeof *tcp);
+    struct wsg_peer_config conns = {
+        .size = sizeof(struct wsg_tcp_conn),
+        .offset = offsetof(struct wsg_tcp_conn, peer),
+        .max = cfg->max_clients,
+        .gen_mask = WSG_TCP_GEN_MASK,
+        .log = "wsgemu: tcp %s: closing",
+        .reset_on_overflow = 1,
+        .watch = conn_watch,
+        .gone = send_errno_is_peer_gone,
+        .defer = conn_defer,
+        .closed = conn_closed,
+        .ctx = tcp,
+    };
     int r;
 
     if (!tcp) {
@@ -461,9 +371,9 @@ static int tcp_open(struct wsg_transport *t,
     tcp->dev = env->dev;
     tcp->tag_base = t->tag_base;
     tcp->check_crc = cfg->check_crc;
-    tcp->max_clients = cfg->max_clients;
-    if (tcp->max_clients == 0 || tcp->max_clients > WSG_TCP_CONN_MAX)
-        tcp->max_clients = WSG_TCP_CONN_MAX;
+    if (conns.max == 0 || conns.max > WSG_TCP_CONN_MAX)
+        conns.max = WSG_TCP_CONN_MAX;
+    wsg_peer_set_init(&tcp->conns, tcp->reactor, &conns);
     wsg_transport_watch_init(t, &tcp->watch, -1);
     tcp->spare_fd = open("/dev/null", O_RDONLY | O_CLOEXEC);
     r = wsg_transport_listen_tcp(&cfg->ep, WSG_TCP_BACKLOG, "tcp", tcp->local,
