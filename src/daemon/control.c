@@ -44,17 +44,21 @@
 
 struct wsg_ctl;
 
+/* A client on the socket: its session, and the peer it answers through. */
 struct wsg_ctl_client {
     struct wsg_ctl *ctl;
-    int overlong;     /* discarding the rest of a too long line */
-    unsigned gripper; /* the gripper this client's commands act on */
-    size_t len;
-    char line[WSG_CTL_LINE_MAX + 1];
+    struct wsg_ctl_session s;
     struct wsg_peer peer; /* last: the set allocates the struct around it */
 };
 
+/* What a command runs with: the channel and the session it came from. */
+struct ctl_ctx {
+    struct wsg_ctl *ctl;
+    struct wsg_ctl_session *s;
+};
+
 struct wsg_ctl {
-    struct wsg_watch watch; /* the listening socket */
+    struct wsg_watch watch; /* the listening socket; fd -1: none */
     struct wsg_reactor *reactor;
     struct wsg_sched *sched;
     struct wsg_gripper *cur; /* the line being run acts on this one */
@@ -68,13 +72,13 @@ static struct wsg_ctl_client *client_of(struct wsg_peer *p)
 }
 
 /* One answer line; the newline is added here. */
-static void reply(struct wsg_ctl_client *c, const char *fmt, ...)
+static void reply(struct ctl_ctx *c, const char *fmt, ...)
 {
     char buf[WSG_CTL_REPLY_MAX];
     va_list ap;
     int n;
 
-    if (c->peer.dead)
+    if (c->s->closed)
         return;
     va_start(ap, fmt);
     n = vsnprintf(buf, sizeof buf - 1, fmt, ap);
@@ -84,7 +88,7 @@ static void reply(struct wsg_ctl_client *c, const char *fmt, ...)
     if ((size_t)n > sizeof buf - 2)
         n = (int)(sizeof buf - 2);
     buf[n++] = '\n';
-    wsg_peer_send(&c->peer, (const uint8_t *)buf, (size_t)n);
+    c->s->answer(c->s->ctx, buf, (size_t)n);
 }
 
 /* ---- arguments ---- */
@@ -115,7 +119,7 @@ static void format_time(char *buf, size_t len, uint64_t us)
 
 /* ---- commands ---- */
 
-static void cmd_part(struct wsg_ctl_client *c, int argc, char **argv)
+static void cmd_part(struct ctl_ctx *c, int argc, char **argv)
 {
     struct wsg_axis *ax = &c->ctl->cur->dev.axis;
     struct wsg_axis_range r = wsg_axis_config_range(&ax->cfg, WSG_AXIS_WIDTH);
@@ -143,7 +147,7 @@ static void cmd_part(struct wsg_ctl_client *c, int argc, char **argv)
     reply(c, "ok part %g %g", ax->part_width, ax->part_stiffness);
 }
 
-static void cmd_obstacle(struct wsg_ctl_client *c, int argc, char **argv)
+static void cmd_obstacle(struct ctl_ctx *c, int argc, char **argv)
 {
     struct wsg_axis *ax = &c->ctl->cur->dev.axis;
     struct wsg_axis_range r = wsg_axis_config_range(&ax->cfg, WSG_AXIS_WIDTH);
@@ -176,7 +180,7 @@ static const struct {
               {"current", WSG_SF_CURR_FAULT},
               {"finger", WSG_SF_FINGER_FAULT}};
 
-static void cmd_fault(struct wsg_ctl_client *c, int argc, char **argv)
+static void cmd_fault(struct ctl_ctx *c, int argc, char **argv)
 {
     size_t i;
     int on;
@@ -207,7 +211,7 @@ static void cmd_fault(struct wsg_ctl_client *c, int argc, char **argv)
           argv[1]);
 }
 
-static void reply_time(struct wsg_ctl_client *c)
+static void reply_time(struct ctl_ctx *c)
 {
     char t[32];
 
@@ -217,7 +221,7 @@ static void reply_time(struct wsg_ctl_client *c)
     reply(c, "ok %s", t);
 }
 
-static void cmd_time(struct wsg_ctl_client *c, int argc, char **argv)
+static void cmd_time(struct ctl_ctx *c, int argc, char **argv)
 {
     struct wsg_sched *l = c->ctl->sched;
     uint32_t step_us = c->ctl->cur->dev.axis.cfg.step_us;
@@ -309,7 +313,7 @@ static void append(char *buf, size_t cap, size_t *used, const char *fmt, ...)
         *used += (size_t)n;
 }
 
-static void cmd_state(struct wsg_ctl_client *c, int argc, char **argv)
+static void cmd_state(struct ctl_ctx *c, int argc, char **argv)
 {
     (void)argc;
     (void)argv;
@@ -357,7 +361,7 @@ static void cmd_state(struct wsg_ctl_client *c, int argc, char **argv)
     reply(c, "ok %s", buf);
 }
 
-static void cmd_drop(struct wsg_ctl_client *c, int argc, char **argv)
+static void cmd_drop(struct ctl_ctx *c, int argc, char **argv)
 {
     (void)argc;
     (void)argv;
@@ -371,7 +375,7 @@ static void cmd_drop(struct wsg_ctl_client *c, int argc, char **argv)
     reply(c, "ok dropped %u", n);
 }
 
-static void cmd_reset(struct wsg_ctl_client *c, int argc, char **argv)
+static void cmd_reset(struct ctl_ctx *c, int argc, char **argv)
 {
     (void)argc;
     (void)argv;
@@ -380,7 +384,7 @@ static void cmd_reset(struct wsg_ctl_client *c, int argc, char **argv)
     reply(c, "ok reset");
 }
 
-static void cmd_gripper(struct wsg_ctl_client *c, int argc, char **argv)
+static void cmd_gripper(struct ctl_ctx *c, int argc, char **argv)
 {
     const struct wsg_sched *l = c->ctl->sched;
     double v;
@@ -396,13 +400,14 @@ static void cmd_gripper(struct wsg_ctl_client *c, int argc, char **argv)
                   (unsigned long)l->ngrippers - 1ul);
             return;
         }
-        c->gripper = (unsigned)v;
+        c->s->gripper = (unsigned)v;
     }
-    reply(c, "ok gripper %u of %lu", c->gripper, (unsigned long)l->ngrippers);
+    reply(c, "ok gripper %u of %lu", c->s->gripper,
+          (unsigned long)l->ngrippers);
 }
 
 /* The loop's figures, for benchmarks and to see a fleet's state. */
-static void cmd_stats(struct wsg_ctl_client *c, int argc, char **argv)
+static void cmd_stats(struct ctl_ctx *c, int argc, char **argv)
 {
     (void)argc;
     (void)argv;
@@ -423,10 +428,10 @@ static void cmd_stats(struct wsg_ctl_client *c, int argc, char **argv)
           l->scale, l->paused ? "true" : "false");
 }
 
-static void run_command(struct wsg_ctl_client *c, int argc, char **argv);
-static void cmd_help(struct wsg_ctl_client *c, int argc, char **argv);
+static void run_command(struct ctl_ctx *c, int argc, char **argv);
+static void cmd_help(struct ctl_ctx *c, int argc, char **argv);
 
-static void run_line(struct wsg_ctl_client *c, char *line)
+static void run_line(struct ctl_ctx *c, char *line)
 {
     char *argv[WSG_CTL_ARGS_MAX];
     int argc = 0;
@@ -457,7 +462,7 @@ static void run_line(struct wsg_ctl_client *c, char *line)
      * command reads or changes it; afterwards it is stepped if it now has
      * work. Settled like a gripper command: a fault's consequences (FAST
      * STOP, a motion aborted) are there when "ok" is. */
-    c->ctl->cur = &c->ctl->sched->grippers[c->gripper];
+    c->ctl->cur = &c->ctl->sched->grippers[c->s->gripper];
     wsg_sched_touch(c->ctl->sched, c->ctl->cur);
     run_command(c, argc, argv);
     wsg_axis_settle(&c->ctl->cur->dev.axis);
@@ -468,7 +473,7 @@ static void run_line(struct wsg_ctl_client *c, char *line)
  * are refused them here, once), and its form for help. */
 static const struct ctl_command {
     const char *name;
-    void (*run)(struct wsg_ctl_client *c, int argc, char **argv);
+    void (*run)(struct ctl_ctx *c, int argc, char **argv);
     int takes_args;
     const char *form;
 } ctl_commands[] = {
@@ -486,7 +491,7 @@ static const struct ctl_command {
 
 #define CTL_NCOMMANDS (sizeof ctl_commands / sizeof ctl_commands[0])
 
-static void cmd_help(struct wsg_ctl_client *c, int argc, char **argv)
+static void cmd_help(struct ctl_ctx *c, int argc, char **argv)
 {
     char buf[WSG_CTL_REPLY_MAX - 8];
     size_t used = 0, i;
@@ -501,7 +506,7 @@ static void cmd_help(struct wsg_ctl_client *c, int argc, char **argv)
     reply(c, "ok commands: %s", buf);
 }
 
-static void run_command(struct wsg_ctl_client *c, int argc, char **argv)
+static void run_command(struct ctl_ctx *c, int argc, char **argv)
 {
     size_t i;
 
@@ -519,31 +524,56 @@ static void run_command(struct wsg_ctl_client *c, int argc, char **argv)
     reply(c, "error unknown command '%.32s' (try help)", argv[0]);
 }
 
-static void client_input(struct wsg_ctl_client *c, const char *data, size_t n)
+void wsg_control_session_init(struct wsg_ctl_session *s,
+                              void (*answer)(void *ctx, const char *line,
+                                             size_t len),
+                              void *ctx)
 {
+    memset(s, 0, sizeof *s);
+    s->answer = answer;
+    s->ctx = ctx;
+}
+
+void wsg_control_input(struct wsg_ctl *ctl, struct wsg_ctl_session *s,
+                       const char *data, size_t n)
+{
+    struct ctl_ctx c;
     size_t i;
 
-    for (i = 0; i < n && !c->peer.dead; i++) {
+    c.ctl = ctl;
+    c.s = s;
+    for (i = 0; i < n && !s->closed; i++) {
         char ch = data[i];
 
         if (ch == '\n') {
-            if (c->overlong)
-                reply(c, "error line longer than %u bytes", WSG_CTL_LINE_MAX);
+            if (s->overlong)
+                reply(&c, "error line longer than %u bytes", WSG_CTL_LINE_MAX);
             else {
-                c->line[c->len] = '\0';
-                run_line(c, c->line);
+                s->line[s->len] = '\0';
+                run_line(&c, s->line);
             }
-            c->len = 0;
-            c->overlong = 0;
-        } else if (c->overlong) {
+            s->len = 0;
+            s->overlong = 0;
+        } else if (s->overlong) {
             continue;
-        } else if (c->len == WSG_CTL_LINE_MAX || ch == '\0') {
+        } else if (s->len == WSG_CTL_LINE_MAX || ch == '\0') {
             /* A NUL would cut the line short unseen: treat as garbage. */
-            c->overlong = 1;
+            s->overlong = 1;
         } else {
-            c->line[c->len++] = ch;
+            s->line[s->len++] = ch;
         }
     }
+}
+
+/* A session's answers go out through the client's peer; once it is gone,
+ * the lines it sent are not run. */
+static void client_answer(void *ctx, const char *line, size_t len)
+{
+    struct wsg_ctl_client *c = ctx;
+
+    if (!c->peer.dead)
+        wsg_peer_send(&c->peer, (const uint8_t *)line, len);
+    c->s.closed = c->peer.dead;
 }
 
 static void client_read(struct wsg_ctl_client *c)
@@ -553,7 +583,7 @@ static void client_read(struct wsg_ctl_client *c)
 
     n = recv(c->peer.watch.fd, buf, sizeof buf, MSG_DONTWAIT);
     if (n > 0) {
-        client_input(c, buf, (size_t)n);
+        wsg_control_input(c->ctl, &c->s, buf, (size_t)n);
         return;
     }
     if (n == 0) {
@@ -607,6 +637,7 @@ static void on_listen(struct wsg_watch *w, uint32_t events)
         return;
     }
     client_of(p)->ctl = ctl;
+    wsg_control_session_init(&client_of(p)->s, client_answer, client_of(p));
 }
 
 /* After each batch: free the clients that ended during it. */
@@ -637,9 +668,8 @@ void wsg_control_close(struct wsg_ctl *ctl)
     free(ctl);
 }
 
-int wsg_control_open(struct wsg_ctl **out, struct wsg_reactor *reactor,
-                     struct wsg_sched *sched, const struct wsg_endpoint *ep,
-                     char *err, size_t errlen)
+int wsg_control_new(struct wsg_ctl **out, struct wsg_reactor *reactor,
+                    struct wsg_sched *sched)
 {
     struct wsg_ctl *ctl = calloc(1, sizeof *ctl);
     /* No generations (no sessions to tell apart), and a client dropped
@@ -652,17 +682,30 @@ int wsg_control_open(struct wsg_ctl **out, struct wsg_reactor *reactor,
         .watch = client_watch,
         .ctx = ctl,
     };
-    int r;
 
     *out = NULL;
-    if (!ctl) {
-        snprintf(err, errlen, "cannot listen on control: %s",
-                 strerror(ENOMEM));
+    if (!ctl)
         return -ENOMEM;
-    }
     ctl->reactor = reactor;
     ctl->sched = sched;
+    ctl->watch.fd = -1;
     wsg_peer_set_init(&ctl->clients, reactor, &clients);
+    *out = ctl;
+    return 0;
+}
+
+int wsg_control_open(struct wsg_ctl **out, struct wsg_reactor *reactor,
+                     struct wsg_sched *sched, const struct wsg_endpoint *ep,
+                     char *err, size_t errlen)
+{
+    struct wsg_ctl *ctl;
+    int r;
+
+    r = wsg_control_new(&ctl, reactor, sched);
+    if (r < 0) {
+        snprintf(err, errlen, "cannot listen on control: %s", strerror(-r));
+        return r;
+    }
     r = wsg_transport_listen_tcp(ep, (int)WSG_CTL_CLIENTS_MAX, "control",
                                  ctl->local, sizeof ctl->local, err, errlen);
     if (r < 0)
@@ -672,21 +715,18 @@ int wsg_control_open(struct wsg_ctl **out, struct wsg_reactor *reactor,
     if (r < 0) {
         snprintf(err, errlen, "cannot listen on control %s: epoll: %s",
                  ctl->local, strerror(-r));
-        goto fail_fd;
+        goto fail;
     }
     r = wsg_reactor_after(reactor, ctl_reap, ctl);
     if (r < 0) {
         snprintf(err, errlen, "cannot serve control %s: %s", ctl->local,
                  strerror(-r));
-        wsg_reactor_del(reactor, &ctl->watch);
-        goto fail_fd;
+        goto fail;
     }
     *out = ctl;
     return 0;
 
-fail_fd:
-    close(ctl->watch.fd);
 fail:
-    free(ctl);
+    wsg_control_close(ctl);
     return r;
 }

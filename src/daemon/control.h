@@ -28,14 +28,41 @@
 
 struct wsg_ctl;
 
-/* Listen on ep and serve. On failure put a one-line reason in err and
- * return -errno (*out NULL). */
+/* One client's side of the conversation: the line it is sending, the
+ * gripper its commands act on (`gripper N`), and where its answers go:
+ * answer gets each answer line, newline included. The owner sets closed
+ * when the client is gone; its further lines are then not run. */
+struct wsg_ctl_session {
+    unsigned gripper;
+    int overlong; /* discarding the rest of a too long line */
+    int closed;
+    size_t len;
+    char line[WSG_CTL_LINE_MAX + 1];
+    void (*answer)(void *ctx, const char *line, size_t len);
+    void *ctx;
+};
+
+/* A control channel on the scheduler's grippers that serves no socket
+ * (tests, fuzzing): sessions are fed with wsg_control_input. 0 or
+ * -ENOMEM. */
+int wsg_control_new(struct wsg_ctl **out, struct wsg_reactor *reactor,
+                    struct wsg_sched *sched);
+void wsg_control_session_init(struct wsg_ctl_session *s,
+                              void (*answer)(void *ctx, const char *line,
+                                             size_t len),
+                              void *ctx);
+/* Bytes a client sent: every complete line is run and answered, one
+ * answer per line, in order. */
+void wsg_control_input(struct wsg_ctl *ctl, struct wsg_ctl_session *s,
+                       const char *data, size_t n);
+/* A control channel listening on ep. On failure put a one-line reason in
+ * err and return -errno (*out NULL). */
 int wsg_control_open(struct wsg_ctl **out, struct wsg_reactor *reactor,
                      struct wsg_sched *sched, const struct wsg_endpoint *ep,
                      char *err, size_t errlen);
 /* The address it listens on, for the ready line. */
 int wsg_control_describe(const struct wsg_ctl *ctl, char *buf, size_t len);
-/* Close every client and the socket; safe on NULL. */
+/* Close every client and the socket (if any); safe on NULL. */
 void wsg_control_close(struct wsg_ctl *ctl);
 
 #endif
