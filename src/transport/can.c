@@ -135,20 +135,43 @@ static void can_send_failed(struct wsg_can *can, int err)
     can_arm_timer(can, 0);
 }
 
-static void can_flush(struct wsg_can *can)
+/* Write frames in order until the interface takes no more: how many
+ * went, or -1 after a hard error (reported, and the queue is gone). */
+static int can_write_run(struct wsg_can *can, const struct can_frame *f,
+                         unsigned n)
 {
-    while (can->qlen > 0) {
-        int r = can_write(can, &can->queue[can->qhead]);
+    unsigned i;
+
+    for (i = 0; i < n; i++) {
+        int r = can_write(can, &f[i]);
 
         if (r == 0)
             break;
         if (r < 0) {
             can_send_failed(can, -r);
-            return;
+            return -1;
         }
         can->send_error = 0;
-        can->qhead = (can->qhead + 1) % WSG_CAN_QUEUE_FRAMES;
-        can->qlen--;
+    }
+    return (int)i;
+}
+
+static void can_flush(struct wsg_can *can)
+{
+    /* The ring in at most two runs: to its end, then from its start. */
+    while (can->qlen > 0) {
+        unsigned run = WSG_CAN_QUEUE_FRAMES - can->qhead;
+        int k;
+
+        if (run > can->qlen)
+            run = can->qlen;
+        k = can_write_run(can, &can->queue[can->qhead], run);
+        if (k < 0)
+            return;
+        can->qhead = (can->qhead + (unsigned)k) % WSG_CAN_QUEUE_FRAMES;
+        can->qlen -= (unsigned)k;
+        if ((unsigned)k < run)
+            break;
     }
     if (can->qlen == 0) {
         can->qhead = 0;
@@ -191,8 +214,9 @@ static void can_enqueue(struct wsg_can *can, const struct can_frame *f,
 static void can_packet(struct wsg_session *s, const uint8_t *pkt, size_t len)
 {
     struct wsg_can *can = s->ctx;
+    /* Zeroed whole: no byte of a frame goes out unset. */
     struct can_frame
-        f[(WSG_FRAME_MAX + WSG_CAN_DATA_MAX - 1) / WSG_CAN_DATA_MAX];
+        f[(WSG_FRAME_MAX + WSG_CAN_DATA_MAX - 1) / WSG_CAN_DATA_MAX] = {{0}};
     unsigned n = 0, i = 0;
     size_t off;
 
@@ -202,7 +226,6 @@ static void can_packet(struct wsg_session *s, const uint8_t *pkt, size_t len)
         size_t chunk =
             len - off < WSG_CAN_DATA_MAX ? len - off : WSG_CAN_DATA_MAX;
 
-        memset(&f[n], 0, sizeof f[n]);
         f[n].can_id = can->tx_id;
         f[n].can_dlc = (uint8_t)chunk;
         memcpy(f[n].data, pkt + off, chunk);
@@ -210,17 +233,11 @@ static void can_packet(struct wsg_session *s, const uint8_t *pkt, size_t len)
     /* Behind queued frames a packet must wait its turn, or its frames would
      * land in the middle of an earlier packet's. */
     if (can->qlen == 0) {
-        for (; i < n; i++) {
-            int r = can_write(can, &f[i]);
+        int k = can_write_run(can, f, n);
 
-            if (r == 0)
-                break;
-            if (r < 0) {
-                can_send_failed(can, -r);
-                return;
-            }
-            can->send_error = 0;
-        }
+        if (k < 0)
+            return;
+        i = (unsigned)k;
     }
     /* Into an empty queue the rest of a packet always fits (a packet is at
      * most 34 frames), so only whole packets are ever dropped. */
