@@ -14,6 +14,7 @@
 #include "ctljson.h"
 #include "wsg/device.h"
 #include "wsg/proto.h"
+#include "wsgclient.h"
 
 #include <errno.h>
 #include <fcntl.h>
@@ -60,26 +61,12 @@ struct opts {
     long count; /* watch: stop after this many values; 0: until SIGINT */
 };
 
+/* The link to the gripper, and whether its close was announced. */
 struct conn {
     enum link_kind kind;
-    int fd;  /* where requests go */
-    int rfd; /* where answers come from (UDP: a second socket) */
-    struct sockaddr_storage to;
-    socklen_t to_len;
+    struct wsg_client l;
     int announced; /* TCP: 07h sent, no second one */
-    struct wsg_parser parser;
-    uint8_t in[2048];
-    size_t in_off, in_len;
 };
-
-struct reply {
-    uint8_t id;
-    uint16_t len;
-    unsigned status; /* 0xFFFF when shorter than a status */
-    uint8_t payload[WSG_REPLY_PAYLOAD_MAX];
-};
-#define R_PARAMS(r)  ((r)->payload + 2)
-#define R_NPARAMS(r) ((r)->len >= 2 ? (size_t)(r)->len - 2 : 0)
 
 struct ctx {
     struct opts o;
@@ -97,14 +84,6 @@ static void err(const char *fmt, ...)
     vfprintf(stderr, fmt, ap);
     va_end(ap);
     fputc('\n', stderr);
-}
-
-static double now_ms(void)
-{
-    struct timespec ts;
-
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return ts.tv_sec * 1000.0 + ts.tv_nsec / 1e6;
 }
 
 static void on_signal(int sig)
@@ -194,7 +173,7 @@ static int split_addr(const char *addr, char *host, size_t cap,
 /* ---- the link ---- */
 
 static int resolve(const char *host, unsigned long port, int socktype,
-                   struct sockaddr_storage *sa, socklen_t *len)
+                   struct sockaddr_in *sa)
 {
     struct addrinfo hints, *res;
     char serv[16];
@@ -209,55 +188,30 @@ static int resolve(const char *host, unsigned long port, int socktype,
         err("%s: %s", host, gai_strerror(rc));
         return -1;
     }
-    memcpy(sa, res->ai_addr, res->ai_addrlen);
-    *len = res->ai_addrlen;
+    memcpy(sa, res->ai_addr, sizeof *sa);
     freeaddrinfo(res);
     return 0;
 }
 
-/* Non-blocking connect, so an unreachable host costs --timeout, not the
- * kernel's minutes. */
 static int open_tcp(struct conn *c, const char *addr, double timeout_s)
 {
     char host[256];
     unsigned long port;
-    int fd, one = 1, soerr = 0;
-    socklen_t sl = sizeof soerr;
-    struct pollfd pfd;
+    struct sockaddr_in sa;
+    int r;
 
     if (split_addr(addr, host, sizeof host, &port, NULL) < 0) {
         err("bad TCP address \"%s\" (HOST:PORT)", addr);
         return -EXIT_USAGE;
     }
-    if (resolve(host, port, SOCK_STREAM, &c->to, &c->to_len) < 0)
+    if (resolve(host, port, SOCK_STREAM, &sa) < 0)
         return -EXIT_CONN;
-    fd = socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC | SOCK_NONBLOCK, 0);
-    if (fd < 0) {
-        err("socket: %s", strerror(errno));
+    r = wsg_client_open_tcp(&c->l, &sa, (int)(timeout_s * 1000));
+    if (r < 0) {
+        err("connect to %s: %s", addr,
+            r == -ETIMEDOUT ? "timed out" : strerror(-r));
         return -EXIT_CONN;
     }
-    if (connect(fd, (struct sockaddr *)&c->to, c->to_len) < 0) {
-        if (errno != EINPROGRESS) {
-            err("connect to %s: %s", addr, strerror(errno));
-            close(fd);
-            return -EXIT_CONN;
-        }
-        pfd.fd = fd;
-        pfd.events = POLLOUT;
-        if (poll(&pfd, 1, (int)(timeout_s * 1000)) <= 0) {
-            err("connect to %s: timed out", addr);
-            close(fd);
-            return -EXIT_CONN;
-        }
-        getsockopt(fd, SOL_SOCKET, SO_ERROR, &soerr, &sl);
-        if (soerr) {
-            err("connect to %s: %s", addr, strerror(soerr));
-            close(fd);
-            return -EXIT_CONN;
-        }
-    }
-    setsockopt(fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);
-    c->fd = c->rfd = fd;
     return 0;
 }
 
@@ -268,25 +222,23 @@ static int open_udp(struct conn *c, const char *addr)
     char host[256];
     unsigned long port, local = DEFAULT_UDP_PORT;
     struct sockaddr_in sa;
+    int rfd, r;
 
     if (split_addr(addr, host, sizeof host, &port, &local) < 0 || local == 0) {
         err("bad UDP address \"%s\" (HOST:PORT[:LOCAL])", addr);
         return -EXIT_USAGE;
     }
-    if (resolve(host, port, SOCK_DGRAM, &c->to, &c->to_len) < 0)
+    if (resolve(host, port, SOCK_DGRAM, &sa) < 0)
         return -EXIT_CONN;
-    c->rfd = socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC, 0);
-    c->fd = socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC, 0);
-    if (c->rfd < 0 || c->fd < 0) {
-        err("socket: %s", strerror(errno));
+    r = wsg_client_udp_bind(htonl(INADDR_ANY), (uint16_t)local, &rfd, NULL);
+    if (r < 0) {
+        err("bind UDP port %lu: %s", local, strerror(-r));
         return -EXIT_CONN;
     }
-    memset(&sa, 0, sizeof sa);
-    sa.sin_family = AF_INET;
-    sa.sin_addr.s_addr = htonl(INADDR_ANY);
-    sa.sin_port = htons((uint16_t)local);
-    if (bind(c->rfd, (struct sockaddr *)&sa, sizeof sa) < 0) {
-        err("bind UDP port %lu: %s", local, strerror(errno));
+    r = wsg_client_open_udp(&c->l, &sa, rfd, 1);
+    if (r < 0) {
+        close(rfd);
+        err("socket: %s", strerror(-r));
         return -EXIT_CONN;
     }
     return 0;
@@ -294,43 +246,35 @@ static int open_udp(struct conn *c, const char *addr)
 
 static int open_serial(struct conn *c, const char *path)
 {
-    struct termios tio;
-    int fd = open(path, O_RDWR | O_NOCTTY | O_CLOEXEC);
+    int r = wsg_client_open_serial(&c->l, path);
 
-    if (fd < 0) {
-        err("open %s: %s", path, strerror(errno));
-        return -EXIT_CONN;
-    }
-    if (tcgetattr(fd, &tio) < 0) {
-        err("%s: not a serial port: %s", path, strerror(errno));
-        close(fd);
-        return -EXIT_CONN;
-    }
-    cfmakeraw(&tio);
-    cfsetispeed(&tio, B115200);
-    cfsetospeed(&tio, B115200);
-    tio.c_cflag &= ~(tcflag_t)(CSTOPB | PARENB | CSIZE);
-    tio.c_cflag |= CS8 | CLOCAL | CREAD;
-    tio.c_cc[VMIN] = 0; /* reads are preceded by poll() */
-    tio.c_cc[VTIME] = 0;
-    if (tcsetattr(fd, TCSANOW, &tio) < 0) {
-        err("%s: tcsetattr: %s", path, strerror(errno));
-        close(fd);
-        return -EXIT_CONN;
-    }
-    /* Answers meant for a previous client are not ours. */
-    tcflush(fd, TCIFLUSH);
-    c->fd = c->rfd = fd;
-    return 0;
+    if (r == -ENOTTY)
+        err("%s: not a serial port: %s", path, strerror(-r));
+    else if (r < 0)
+        err("open %s: %s", path, strerror(-r));
+    return r < 0 ? -EXIT_CONN : 0;
+}
+
+static int warn_bad(struct wsg_client *l, enum wsg_parse_event ev, uint8_t id)
+{
+    (void)l;
+    err("warning: dropped a packet with ID %02Xh: %s", id,
+        ev == WSG_PARSE_BAD_CRC ? "bad checksum" : "oversize");
+    return 0; /* and go on */
 }
 
 static int conn_open(struct conn *c, const struct opts *o)
 {
+    static const enum wsg_link_kind kinds[] = {[LINK_TCP] = WSG_LINK_TCP,
+                                               [LINK_UDP] = WSG_LINK_UDP,
+                                               [LINK_SERIAL] = WSG_LINK_SERIAL,
+                                               [LINK_CONTROL] = WSG_LINK_TCP};
+
     memset(c, 0, sizeof *c);
-    c->fd = c->rfd = -1;
     c->kind = o->kind;
-    wsg_parser_init(&c->parser, 1);
-    wsg_parser_set_max(&c->parser, WSG_REPLY_PAYLOAD_MAX);
+    wsg_client_init(&c->l, kinds[o->kind]);
+    c->l.stop = &interrupted;
+    c->l.on_bad = warn_bad;
     switch (o->kind) {
     case LINK_TCP:
         return open_tcp(c, o->addr, o->timeout_s);
@@ -347,102 +291,40 @@ static int conn_open(struct conn *c, const struct opts *o)
 static int conn_send(struct conn *c, uint8_t id, const uint8_t *payload,
                      size_t len)
 {
-    uint8_t pkt[WSG_FRAME_MAX];
-    size_t n = wsg_frame_encode(pkt, sizeof pkt, id, payload, len);
-    ssize_t w;
+    int r = wsg_client_send_frame(&c->l, id, payload, len);
 
-    if (n == 0) {
+    if (r == -EMSGSIZE) {
         err("payload too long (%zu bytes)", len);
         return -EXIT_USAGE;
     }
-    /* One write per packet: the gripper's readers expect that too. */
-    if (c->kind == LINK_UDP)
-        w = sendto(c->fd, pkt, n, 0, (struct sockaddr *)&c->to, c->to_len);
-    else if (c->kind == LINK_TCP)
-        w = send(c->fd, pkt, n, MSG_NOSIGNAL);
-    else
-        w = write(c->fd, pkt, n);
-    if (w != (ssize_t)n) {
-        err("send: %s", w < 0 ? strerror(errno) : "short write");
+    if (r < 0) {
+        err("send: %s", r == -EIO ? "short write" : strerror(-r));
         return -EXIT_CONN;
     }
     return 0;
 }
 
-/* Next good frame. 1: got one; 0: deadline passed; -1: end of stream or
- * error (reported); -2: interrupted. */
-static int conn_recv(struct conn *c, struct reply *r, double deadline)
+/* A receive's result as wsgctl takes it: 1 got one; 0 deadline passed; -1
+ * end of stream or error (reported); -2 interrupted. */
+static int conn_result(const struct conn *c, int rc)
 {
-    for (;;) {
-        while (c->in_off < c->in_len) {
-            enum wsg_parse_event ev;
-            struct wsg_frame f;
+    if (rc >= 0)
+        return rc;
+    if (rc == -EINTR)
+        return -2;
+    if (rc == -EPIPE)
+        err(c->kind == LINK_SERIAL ? "the line hung up"
+                                   : "the gripper closed the connection");
+    else
+        err("receive: %s", strerror(-rc));
+    return -1;
+}
 
-            c->in_off += wsg_parser_feed(&c->parser, c->in + c->in_off,
-                                         c->in_len - c->in_off, &ev, &f);
-            if (ev == WSG_PARSE_FRAME) {
-                r->id = f.id;
-                r->len = f.len;
-                memcpy(r->payload, f.payload, f.len);
-                r->status = f.len >= 2 ? wsg_get_u16(f.payload) : 0xFFFFu;
-                return 1;
-            }
-            if (ev == WSG_PARSE_BAD_CRC || ev == WSG_PARSE_OVERSIZE)
-                err("warning: dropped a packet with ID %02Xh: %s", f.id,
-                    ev == WSG_PARSE_BAD_CRC ? "bad checksum" : "oversize");
-        }
-        if (interrupted)
-            return -2;
-        double left = deadline - now_ms();
-        if (left <= 0)
-            return 0;
-        struct pollfd pfd = {.fd = c->rfd, .events = POLLIN, .revents = 0};
-        /* Slices, so a signal that lands just before poll() is seen. */
-        int rc = poll(&pfd, 1, left > 200 ? 200 : (int)left + 1);
-        if (rc < 0 && errno == EINTR)
-            continue;
-        if (rc < 0) {
-            err("poll: %s", strerror(errno));
-            return -1;
-        }
-        if (rc == 0)
-            continue;
-        if (!(pfd.revents & POLLIN)) {
-            /* A hung-up line would be polled in a busy loop. */
-            err("the line hung up");
-            return -1;
-        }
-        ssize_t got;
-        if (c->kind == LINK_UDP) {
-            struct sockaddr_in from;
-            socklen_t fl = sizeof from;
-            got = recvfrom(c->rfd, c->in, sizeof c->in, 0,
-                           (struct sockaddr *)&from, &fl);
-            /* Only the gripper's answers count. */
-            const struct sockaddr_in *to = (const struct sockaddr_in *)&c->to;
-            if (got > 0 && from.sin_addr.s_addr != to->sin_addr.s_addr)
-                continue;
-            /* Each datagram stands alone: no packet spans two. */
-            wsg_parser_init(&c->parser, 1);
-            wsg_parser_set_max(&c->parser, WSG_REPLY_PAYLOAD_MAX);
-        } else {
-            got = read(c->rfd, c->in, sizeof c->in);
-        }
-        if (got < 0 && (errno == EINTR || errno == EAGAIN))
-            continue;
-        if (got < 0) {
-            err("receive: %s", strerror(errno));
-            return -1;
-        }
-        if (got == 0) {
-            if (c->kind == LINK_SERIAL)
-                continue; /* VMIN 0: nothing there after all */
-            err("the gripper closed the connection");
-            return -1;
-        }
-        c->in_off = 0;
-        c->in_len = (size_t)got;
-    }
+/* Next good frame, as conn_result says. */
+static int conn_recv(struct conn *c, struct wsg_client_frame *r,
+                     uint64_t deadline)
+{
+    return conn_result(c, wsg_client_recv(&c->l, r, deadline));
 }
 
 /* Exit status for a conn_recv failure. */
@@ -456,33 +338,34 @@ static int recv_fail(int rc, uint8_t id, const struct opts *o)
     return EXIT_CONN;
 }
 
-typedef void (*pending_fn)(const struct opts *o, const struct reply *r);
+/* The --timeout from now. */
+static uint64_t timeout_deadline(const struct opts *o)
+{
+    return wsg_client_deadline((int)(o->timeout_s * 1000.0));
+}
+
+typedef void (*pending_fn)(const struct opts *o,
+                           const struct wsg_client_frame *r);
 
 /* Send a request and wait for its answer, through E_CMD_PENDING for the
  * final result (on_pending, if given, sees the immediate reply). Frames
  * with other IDs (streams) are skipped. 0 with *r filled, or an exit
  * status. */
 static int xact(struct ctx *x, uint8_t id, const uint8_t *payload, size_t len,
-                struct reply *r, pending_fn on_pending)
+                struct wsg_client_frame *r, pending_fn on_pending)
 {
-    double deadline = now_ms() + x->o.timeout_s * 1000.0;
+    uint64_t deadline = timeout_deadline(&x->o);
     int rc = conn_send(&x->c, id, payload, len);
 
     if (rc < 0)
         return -rc;
-    for (;;) {
-        rc = conn_recv(&x->c, r, deadline);
-        if (rc != 1)
-            return recv_fail(rc, id, &x->o);
-        if (r->id != id)
-            continue;
-        if (r->status == WSG_E_CMD_PENDING) {
-            if (on_pending)
-                on_pending(&x->o, r);
-            continue;
-        }
-        return 0;
+    rc = conn_result(&x->c, wsg_client_recv_id(&x->c.l, id, r, deadline));
+    if (rc == 1 && r->status == WSG_E_CMD_PENDING) {
+        if (on_pending)
+            on_pending(&x->o, r);
+        rc = conn_result(&x->c, wsg_client_final(&x->c.l, r, deadline));
     }
+    return rc == 1 ? 0 : recv_fail(rc, id, &x->o);
 }
 
 /* Over TCP, announce the close (07h), so the gripper does not go into
@@ -490,25 +373,18 @@ static int xact(struct ctx *x, uint8_t id, const uint8_t *payload, size_t len,
  * before the FIN. */
 static void conn_close(struct conn *c)
 {
-    if (c->kind == LINK_TCP && c->fd >= 0 && !c->announced) {
-        struct reply r;
-        double deadline = now_ms() + 1000.0;
+    if (c->kind == LINK_TCP && c->l.fd >= 0 && !c->announced) {
+        struct wsg_client_frame r;
         int saved = interrupted;
 
         interrupted = 0;
-        if (conn_send(c, WSG_CMD_DISCONNECT, NULL, 0) == 0) {
-            while (conn_recv(c, &r, deadline) == 1)
-                if (r.id == WSG_CMD_DISCONNECT)
-                    break;
-        }
+        if (conn_send(c, WSG_CMD_DISCONNECT, NULL, 0) == 0)
+            conn_result(c, wsg_client_recv_id(&c->l, WSG_CMD_DISCONNECT, &r,
+                                              wsg_client_deadline(1000)));
         interrupted = saved;
         c->announced = 1;
     }
-    if (c->rfd >= 0 && c->rfd != c->fd)
-        close(c->rfd);
-    if (c->fd >= 0)
-        close(c->fd);
-    c->fd = c->rfd = -1;
+    wsg_client_close(&c->l);
 }
 
 /* ---- printing values ---- */
@@ -575,10 +451,10 @@ static int control_read(struct ctx *x, uint8_t id, const uint8_t *payload,
 {
     const struct wsg_layout *layout = &wsg_schema[id].reply;
     char line[2048];
-    size_t n = 0, np;
-    double deadline = now_ms() + x->o.timeout_s * 1000.0, v[WSG_FIELDS_MAX];
+    size_t np;
+    double v[WSG_FIELDS_MAX];
     uint8_t p[WSG_REPLY_PARAMS_MAX];
-    int ok = 1;
+    int ok = 1, r;
 
     /* Readings only: 42h's reset flag (stats --reset) changes the
      * gripper. */
@@ -596,27 +472,19 @@ static int control_read(struct ctx *x, uint8_t id, const uint8_t *payload,
             cmd_name(id));
         return EXIT_USAGE;
     }
-    if (write(x->c.fd, "state\n", 6) != 6) {
-        err("control channel: %s", strerror(errno));
+    r = wsg_client_line(&x->c.l, "state", line, sizeof line,
+                        timeout_deadline(&x->o));
+    if (r == 0) {
+        err("control channel: no answer to \"state\"");
         return EXIT_CONN;
     }
-    while (n == 0 || line[n - 1] != '\n') {
-        struct pollfd pfd = {x->c.fd, POLLIN, 0};
-        int ms = (int)(deadline - now_ms());
-        ssize_t k;
-
-        if (ms <= 0 || poll(&pfd, 1, ms) <= 0 || n + 1 >= sizeof line) {
-            err("control channel: no answer to \"state\"");
-            return EXIT_CONN;
-        }
-        k = read(x->c.fd, line + n, sizeof line - 1 - n);
-        if (k <= 0) {
+    if (r < 0) {
+        if (r == -EPIPE)
             err("control channel: closed");
-            return EXIT_CONN;
-        }
-        n += (size_t)k;
+        else
+            err("control channel: %s", strerror(-r));
+        return EXIT_CONN;
     }
-    line[n - 1] = '\0';
     if (strncmp(line, "ok {", 4) != 0) {
         err("control channel: %s", line);
         return EXIT_CONN;
@@ -644,7 +512,7 @@ static int control_read(struct ctx *x, uint8_t id, const uint8_t *payload,
 static int simple(struct ctx *x, uint8_t id, const uint8_t *payload,
                   size_t len, int none_ok)
 {
-    struct reply r;
+    struct wsg_client_frame r;
     int rc;
 
     if (x->c.kind == LINK_CONTROL)
@@ -658,7 +526,7 @@ static int simple(struct ctx *x, uint8_t id, const uint8_t *payload,
     }
     if (r.status != WSG_E_SUCCESS)
         return gripper_error(id, r.status);
-    print_values(&x->o, "", id, R_PARAMS(&r), R_NPARAMS(&r));
+    print_values(&x->o, "", id, WSG_CLIENT_PARAMS(&r), WSG_CLIENT_NPARAMS(&r));
     return EXIT_OK;
 }
 
@@ -879,7 +747,7 @@ static int c_stats(struct ctx *x, int argc, char **argv)
 
 static int c_loop(struct ctx *x, int argc, char **argv)
 {
-    struct reply r;
+    struct wsg_client_frame r;
     size_t n = strlen(argv[0]);
     int rc;
 
@@ -894,7 +762,8 @@ static int c_loop(struct ctx *x, int argc, char **argv)
     if (r.status != WSG_E_SUCCESS)
         return gripper_error(WSG_CMD_LOOP, r.status);
     /* The echo comes back as status plus data, the data being ours. */
-    printf("%.*s\n", (int)R_NPARAMS(&r), (const char *)R_PARAMS(&r));
+    printf("%.*s\n", (int)WSG_CLIENT_NPARAMS(&r),
+           (const char *)WSG_CLIENT_PARAMS(&r));
     return EXIT_OK;
 }
 
@@ -954,15 +823,17 @@ static int raw_item(const char *s, uint8_t *buf, size_t cap, size_t *n)
 }
 
 /* "06h Loop: E_SUCCESS" and the parameters, for raw and decode. */
-static void print_reply(const struct opts *o, const struct reply *r)
+static void print_reply(const struct opts *o, const struct wsg_client_frame *r)
 {
     printf("%02Xh %s: %s\n", r->id, cmd_name(r->id),
            wsg_status_name(r->status));
-    printf("params (%zu):%s", R_NPARAMS(r), R_NPARAMS(r) ? " " : "");
-    print_hex(R_PARAMS(r), R_NPARAMS(r));
+    printf("params (%zu):%s", WSG_CLIENT_NPARAMS(r),
+           WSG_CLIENT_NPARAMS(r) ? " " : "");
+    print_hex(WSG_CLIENT_PARAMS(r), WSG_CLIENT_NPARAMS(r));
     putchar('\n');
     if (r->status == WSG_E_SUCCESS)
-        print_values(o, "", r->id, R_PARAMS(r), R_NPARAMS(r));
+        print_values(o, "", r->id, WSG_CLIENT_PARAMS(r),
+                     WSG_CLIENT_NPARAMS(r));
 }
 
 static int c_raw(struct ctx *x, int argc, char **argv)
@@ -970,7 +841,7 @@ static int c_raw(struct ctx *x, int argc, char **argv)
     uint8_t pl[WSG_PAYLOAD_MAX];
     size_t n = 0;
     unsigned long id;
-    struct reply r;
+    struct wsg_client_frame r;
     int rc;
 
     if (parse_ulong(argv[0], 255, &id) < 0) {
@@ -1024,7 +895,7 @@ static int c_watch(struct ctx *x, int argc, char **argv)
     uint8_t id = 0, pl[3];
     long got = 0;
     int rc = EXIT_OK;
-    struct reply r;
+    struct wsg_client_frame r;
 
     for (size_t i = 0; i < sizeof what / sizeof what[0]; i++)
         if (!strcmp(argv[0], what[i].name))
@@ -1043,8 +914,8 @@ static int c_watch(struct ctx *x, int argc, char **argv)
     if (rc < 0)
         return -rc;
     /* No value for longer than this: the stream is gone. */
-    double gap = x->o.timeout_s * 1000.0 + (double)period;
-    double deadline = now_ms() + gap;
+    int gap = (int)(x->o.timeout_s * 1000.0) + (int)period;
+    uint64_t deadline = wsg_client_deadline(gap);
     rc = EXIT_OK;
     while (x->o.count == 0 || got < x->o.count) {
         int n = conn_recv(&x->c, &r, deadline);
@@ -1060,9 +931,10 @@ static int c_watch(struct ctx *x, int argc, char **argv)
             rc = gripper_error(id, r.status);
             break;
         }
-        deadline = now_ms() + gap;
+        deadline = wsg_client_deadline(gap);
         print_stamp(&x->o);
-        print_values(&x->o, "", id, R_PARAMS(&r), R_NPARAMS(&r));
+        print_values(&x->o, "", id, WSG_CLIENT_PARAMS(&r),
+                     WSG_CLIENT_NPARAMS(&r));
         fflush(stdout);
         got++;
     }
@@ -1071,12 +943,12 @@ static int c_watch(struct ctx *x, int argc, char **argv)
     interrupted = 0;
     memset(pl, 0, sizeof pl);
     if (conn_send(&x->c, id, pl, 3) == 0) {
-        double until = now_ms() + 1000.0;
+        uint64_t until = wsg_client_deadline(1000);
         while (conn_recv(&x->c, &r, until) == 1) {
             if (r.id == id && r.len >= 2 &&
                 wsg_layout_fits(&wsg_schema[id].reply, r.len - 2u)) {
                 /* Drain what was in flight before the answer. */
-                until = now_ms() + 50.0;
+                until = wsg_client_deadline(50);
             }
         }
     }
