@@ -33,6 +33,7 @@
 
 #include "ctljson.h"
 #include "wsg/proto.h"
+#include "wsgclient.h"
 
 #include <arpa/inet.h>
 #include <dirent.h>
@@ -75,7 +76,6 @@
 #define NS_PER_S    1000000000ull
 #define NS_PER_MS   1000000ull
 #define ROWS_MAX    64
-#define LINK_BUF    4096
 #define NOT_APPLIED (-INFINITY) /* a row's reference: not applicable */
 #define EMU         0
 #define REF         1
@@ -101,23 +101,10 @@ struct server {
     char *line; /* the ready line, without its newline */
 };
 
-/* One client connection; requests go to fd, replies come from rfd (UDP:
- * a socket bound to the port the server answers to). */
+/* One client connection, named for messages. */
 struct link {
-    enum link_kind kind;
-    int fd, rfd;
-    int own_rfd;
-    char who[32]; /* "wsgemu TCP", for messages */
-    struct wsg_parser parser;
-    uint8_t in[LINK_BUF];
-    size_t off, len;
-};
-
-struct frame {
-    uint8_t id;
-    uint16_t len;
-    unsigned status;
-    uint8_t payload[WSG_REPLY_PAYLOAD_MAX];
+    struct wsg_client c;
+    char who[32]; /* "wsgemu TCP" */
 };
 
 enum target { T_NONE, T_LT, T_LE, T_GE, T_EQ, T_NEAR };
@@ -595,214 +582,134 @@ static double proc_mib(pid_t pid, const char *key)
 
 /* ---- links ---- */
 
+/* Malformed packets end the measurement: a server must not send them. */
+static int bad_is_fatal(struct wsg_client *c, enum wsg_parse_event ev,
+                        uint8_t id)
+{
+    const struct link *l = c->user;
+
+    msg("%s: malformed packet with ID %02Xh (%s)", l->who, id,
+        ev == WSG_PARSE_BAD_CRC ? "bad checksum" : "oversize");
+    return 1;
+}
+
 static void link_init(struct link *l, enum link_kind kind, const char *name)
 {
-    memset(l, 0, offsetof(struct link, in));
-    l->kind = kind;
-    l->fd = l->rfd = -1;
-    l->off = l->len = 0;
+    static const enum wsg_link_kind kinds[] = {[L_TCP] = WSG_LINK_TCP,
+                                               [L_UDP] = WSG_LINK_UDP,
+                                               [L_PTY] = WSG_LINK_SERIAL};
+
+    wsg_client_init(&l->c, kinds[kind]);
+    l->c.on_bad = bad_is_fatal;
+    l->c.user = l;
     snprintf(l->who, sizeof l->who, "%s %s", name, kind_name[kind]);
-    wsg_parser_init(&l->parser, 1);
-    wsg_parser_set_max(&l->parser, WSG_REPLY_PAYLOAD_MAX);
 }
 
-/* Non-blocking connect with a timeout; the socket stays non-blocking
- * (every read follows a poll). */
+/* A receive that failed (not a timeout), reported. */
+static void link_error(const struct link *l, int r)
+{
+    if (r != -EBADMSG) /* already said by bad_is_fatal */
+        msg("%s: %s", l->who,
+            r == -EPIPE ? "connection closed" : strerror(-r));
+}
+
 static int link_tcp(struct link *l, const struct sockaddr_in *sa)
 {
-    int one = 1, soerr = 0;
-    socklen_t sl = sizeof soerr;
-    struct pollfd p;
+    int r = wsg_client_open_tcp(&l->c, sa, REPLY_MS);
 
-    l->fd = socket(AF_INET, SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
-    if (l->fd < 0)
-        goto fail;
-    l->rfd = l->fd;
-    if (connect(l->fd, (const struct sockaddr *)sa, sizeof *sa) < 0) {
-        if (errno != EINPROGRESS)
-            goto fail;
-        p.fd = l->fd;
-        p.events = POLLOUT;
-        if (poll(&p, 1, REPLY_MS) != 1) {
-            errno = ETIMEDOUT;
-            goto fail;
-        }
-        getsockopt(l->fd, SOL_SOCKET, SO_ERROR, &soerr, &sl);
-        if (soerr) {
-            errno = soerr;
-            goto fail;
-        }
-    }
-    setsockopt(l->fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);
-    return 0;
-fail:
-    msg("%s: connect to port %u: %s", l->who, (unsigned)ntohs(sa->sin_port),
-        strerror(errno));
-    return -1;
+    if (r < 0)
+        msg("%s: connect to port %u: %s", l->who,
+            (unsigned)ntohs(sa->sin_port), strerror(-r));
+    return r < 0 ? -1 : 0;
 }
 
-/* Requests from a connected socket; replies on rfd, which the bench owns
- * (the server was started answering to its port). */
+/* Replies on rfd, which the bench owns (the server was started answering
+ * to its port). */
 static int link_udp(struct link *l, const struct sockaddr_in *sa, int rfd)
 {
-    l->fd = socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC, 0);
-    l->rfd = rfd;
-    if (l->fd < 0 ||
-        connect(l->fd, (const struct sockaddr *)sa, sizeof *sa) < 0) {
-        msg("%s: %s", l->who, strerror(errno));
-        return -1;
-    }
-    return 0;
+    int r = wsg_client_open_udp(&l->c, sa, rfd, 0);
+
+    if (r < 0)
+        msg("%s: %s", l->who, strerror(-r));
+    return r < 0 ? -1 : 0;
 }
 
-/* What a driver does: raw 115200 8N1. */
 static int link_pty(struct link *l, const char *path)
 {
-    struct termios tio;
+    int r = wsg_client_open_serial(&l->c, path);
 
-    l->fd = l->rfd = open(path, O_RDWR | O_NOCTTY | O_NONBLOCK | O_CLOEXEC);
-    if (l->fd < 0 || tcgetattr(l->fd, &tio) < 0)
-        goto fail;
-    cfmakeraw(&tio);
-    tio.c_cflag |= CLOCAL | CREAD;
-    tio.c_cc[VMIN] = 1;
-    tio.c_cc[VTIME] = 0;
-    cfsetspeed(&tio, B115200);
-    if (tcsetattr(l->fd, TCSANOW, &tio) < 0)
-        goto fail;
-    tcflush(l->fd, TCIFLUSH);
-    return 0;
-fail:
-    msg("%s: %s: %s", l->who, path, strerror(errno));
-    return -1;
+    if (r < 0)
+        msg("%s: %s: %s", l->who, path, strerror(-r));
+    return r < 0 ? -1 : 0;
+}
+
+static int link_sent(const struct link *l, int r)
+{
+    if (r < 0)
+        msg("%s: send: %s", l->who, r == -EIO ? "short write" : strerror(-r));
+    return r < 0 ? -1 : 0;
 }
 
 static int link_send(struct link *l, const uint8_t *buf, size_t n)
 {
-    ssize_t w;
-
-    do
-        w = l->kind == L_PTY ? write(l->fd, buf, n)
-                             : send(l->fd, buf, n, MSG_NOSIGNAL);
-    while (w < 0 && errno == EINTR);
-    if (w != (ssize_t)n) {
-        msg("%s: send: %s", l->who, w < 0 ? strerror(errno) : "short write");
-        return -1;
-    }
-    return 0;
+    return link_sent(l, wsg_client_send(&l->c, buf, n));
 }
 
 static int link_sendf(struct link *l, uint8_t id, const uint8_t *payload,
                       size_t len)
 {
-    uint8_t pkt[WSG_FRAME_MAX];
-
-    return link_send(l, pkt,
-                     wsg_frame_encode(pkt, sizeof pkt, id, payload, len));
+    return link_sent(l, wsg_client_send_frame(&l->c, id, payload, len));
 }
 
-/* One read into the (consumed) buffer: the byte count, 0 at the end of
- * the stream, -EAGAIN, or -errno. */
-static long link_fill(struct link *l)
+/* One read of what epoll said is there: 1, 0 when nothing was after all,
+ * -1 at the end of the stream or on an error (reported). */
+static int link_read(struct link *l)
 {
-    ssize_t n;
+    long n = wsg_client_read(&l->c);
 
-    do
-        n = read(l->rfd, l->in, sizeof l->in);
-    while (n < 0 && errno == EINTR);
+    if (n == -EAGAIN)
+        return 0;
     if (n < 0)
-        return errno == EIO ? 0 : -errno; /* pty: the server is gone */
-    if (l->kind == L_UDP) {
-        /* Each datagram stands alone. */
-        wsg_parser_init(&l->parser, 1);
-        wsg_parser_set_max(&l->parser, WSG_REPLY_PAYLOAD_MAX);
-    }
-    l->off = 0;
-    l->len = (size_t)n;
-    return (long)n;
+        link_error(l, (int)n);
+    return n < 0 ? -1 : 1;
 }
 
 /* Wait for input until deadline and read it: 1, 0 on timeout, -1 at the
  * end of the stream or on an error (reported). */
 static int link_wait(struct link *l, uint64_t deadline)
 {
-    for (;;) {
-        struct pollfd p = {l->rfd, POLLIN, 0};
-        uint64_t now = now_ns();
-        long n;
-        int r;
+    int r = wsg_client_fill(&l->c, deadline);
 
-        if (now >= deadline)
-            return 0;
-        r = poll(&p, 1, (int)((deadline - now + NS_PER_MS - 1) / NS_PER_MS));
-        if (r < 0 && errno != EINTR) {
-            msg("%s: poll: %s", l->who, strerror(errno));
-            return -1;
-        }
-        if (r <= 0)
-            continue;
-        n = link_fill(l);
-        if (n == -EAGAIN)
-            continue;
-        if (n <= 0) {
-            msg("%s: %s", l->who,
-                n == 0 ? "connection closed" : strerror((int)-n));
-            return -1;
-        }
-        return 1;
-    }
+    if (r < 0)
+        link_error(l, r);
+    return r < 0 ? -1 : r;
 }
 
 /* Next frame: 1; 0 when none came by deadline (deadline 0: only what is
  * buffered is looked at); -1 on a broken frame, the end of the stream or
  * an error (reported). */
-static int link_recv(struct link *l, struct frame *f, uint64_t deadline)
+static int link_recv(struct link *l, struct wsg_client_frame *f,
+                     uint64_t deadline)
 {
-    for (;;) {
-        while (l->off < l->len) {
-            enum wsg_parse_event ev;
-            struct wsg_frame wf;
+    int r = wsg_client_recv(&l->c, f, deadline);
 
-            l->off += wsg_parser_feed(&l->parser, l->in + l->off,
-                                      l->len - l->off, &ev, &wf);
-            if (ev == WSG_PARSE_FRAME) {
-                f->id = wf.id;
-                f->len = wf.len;
-                memcpy(f->payload, wf.payload, wf.len);
-                f->status = wf.len >= 2 ? wsg_get_u16(wf.payload) : 0xFFFFu;
-                return 1;
-            }
-            if (ev != WSG_PARSE_NONE) {
-                msg("%s: malformed packet with ID %02Xh (%s)", l->who, wf.id,
-                    ev == WSG_PARSE_BAD_CRC ? "bad checksum" : "oversize");
-                return -1;
-            }
-        }
-        if (deadline == 0)
-            return 0;
-        int r = link_wait(l, deadline);
-        if (r <= 0)
-            return r;
-    }
+    if (r < 0)
+        link_error(l, r);
+    return r < 0 ? -1 : r;
 }
 
 /* Wait for a frame with this ID (others are skipped): 0, or -1 with a
  * message. */
-static int link_recv_id(struct link *l, uint8_t id, struct frame *f,
+static int link_recv_id(struct link *l, uint8_t id, struct wsg_client_frame *f,
                         int timeout_ms)
 {
-    uint64_t deadline = now_ns() + (uint64_t)timeout_ms * NS_PER_MS;
+    int r = wsg_client_recv_id(&l->c, id, f, wsg_client_deadline(timeout_ms));
 
-    for (;;) {
-        int r = link_recv(l, f, deadline);
-
-        if (r == 0)
-            msg("%s: no answer to %02Xh within %d ms", l->who, id, timeout_ms);
-        if (r <= 0)
-            return -1;
-        if (f->id == id)
-            return 0;
-    }
+    if (r == 0)
+        msg("%s: no answer to %02Xh within %d ms", l->who, id, timeout_ms);
+    else if (r < 0)
+        link_error(l, r);
+    return r == 1 ? 0 : -1;
 }
 
 /* A motion command through E_CMD_PENDING to its final result. The final
@@ -810,7 +717,7 @@ static int link_recv_id(struct link *l, uint8_t id, struct frame *f,
 static int link_motion(struct link *l, uint8_t id, const uint8_t *payload,
                        size_t len)
 {
-    struct frame f;
+    struct wsg_client_frame f;
 
     if (link_sendf(l, id, payload, len) < 0 ||
         link_recv_id(l, id, &f, REPLY_MS) < 0)
@@ -825,47 +732,26 @@ static int link_motion(struct link *l, uint8_t id, const uint8_t *payload,
  * emulator into FAST STOP. */
 static void link_close(struct link *l)
 {
-    struct frame f;
+    struct wsg_client_frame f;
 
-    if (l->kind == L_TCP && l->fd >= 0 &&
+    if (l->c.kind == WSG_LINK_TCP && l->c.fd >= 0 &&
         link_sendf(l, WSG_CMD_DISCONNECT, NULL, 0) == 0)
         link_recv_id(l, WSG_CMD_DISCONNECT, &f, REPLY_MS);
-    if (l->fd >= 0)
-        close(l->fd);
-    if (l->own_rfd && l->rfd >= 0 && l->rfd != l->fd)
-        close(l->rfd);
-    l->fd = l->rfd = -1;
+    wsg_client_close(&l->c);
 }
 
 /* A control-channel command and its one-line answer (without newline).
  * 0, or -1 (reported). */
 static int ctl_cmd(struct link *l, const char *cmd, char *out, size_t cap)
 {
-    uint64_t deadline = now_ns() + REPLY_MS * NS_PER_MS;
-    char line[128];
-    size_t n = 0;
-    int r;
+    int r =
+        wsg_client_line(&l->c, cmd, out, cap, wsg_client_deadline(REPLY_MS));
 
-    snprintf(line, sizeof line, "%s\n", cmd);
-    if (link_send(l, (const uint8_t *)line, strlen(line)) < 0)
-        return -1;
-    for (;;) {
-        while (l->off < l->len) {
-            char c = (char)l->in[l->off++];
-
-            if (c == '\n') {
-                out[n] = '\0';
-                return 0;
-            }
-            if (n + 1 < cap)
-                out[n++] = c;
-        }
-        r = link_wait(l, deadline);
-        if (r == 0)
-            msg("control: no answer to \"%s\" within %d ms", cmd, REPLY_MS);
-        if (r <= 0)
-            return -1;
-    }
+    if (r == 0)
+        msg("control: no answer to \"%s\" within %d ms", cmd, REPLY_MS);
+    else if (r < 0)
+        link_error(l, r);
+    return r == 1 ? 0 : -1;
 }
 
 /* The control channel's stats: model steps and overruns since start. */
@@ -907,7 +793,7 @@ static int ctl_time(struct link *ctl, double *sim, uint64_t *wall)
 
 static uint8_t req_width[WSG_HEADER_LEN + WSG_CRC_LEN];
 
-static int check_width(const struct link *l, const struct frame *f)
+static int check_width(const struct link *l, const struct wsg_client_frame *f)
 {
     if (f->id == WSG_CMD_GET_WIDTH && f->len == 6 &&
         f->status == WSG_E_SUCCESS)
@@ -942,7 +828,7 @@ static int open_link(struct bench *b, struct link *l, int which,
 static int sample(struct link *l, double *us)
 {
     uint64_t t0 = now_ns();
-    struct frame f;
+    struct wsg_client_frame f;
     int r;
 
     if (link_send(l, req_width, sizeof req_width) < 0)
@@ -969,8 +855,8 @@ static int bench_latency(struct bench *b, enum link_kind kind)
     int s, round, rc = -1;
     struct row *r;
 
-    l[EMU].fd = l[REF].fd = -1;
-    l[EMU].own_rfd = l[REF].own_rfd = 0;
+    l[EMU].c.fd = l[REF].c.fd = -1;
+    l[EMU].c.own_rfd = l[REF].c.own_rfd = 0;
     if (per == 0)
         per = 1;
     if (attach_lacks(b,
@@ -1017,7 +903,7 @@ cleanup:
     snprintf(label, sizeof label, "%s latency max (us)", kind_name[kind]);
     add_row(b, label, d[EMU].max, d[REF].max, 1);
     for (s = 0; s < 2; s++) {
-        if (l[s].fd >= 0)
+        if (l[s].c.fd >= 0)
             link_close(&l[s]);
         free(lat[s]);
     }
@@ -1034,7 +920,7 @@ static int pipelined(struct link *l, long k, uint64_t dur_ns, double *count,
     uint8_t *batch = malloc((size_t)k * sizeof req_width);
     uint64_t t0, end, now;
     long inflight = k, got, i;
-    struct frame f;
+    struct wsg_client_frame f;
     int r, rc = -1;
 
     if (!batch)
@@ -1089,8 +975,8 @@ static int bench_throughput(struct bench *b)
     char label[48];
     int done = 0;
 
-    l[EMU].fd = l[REF].fd = -1;
-    l[EMU].own_rfd = l[REF].own_rfd = 0;
+    l[EMU].c.fd = l[REF].c.fd = -1;
+    l[EMU].c.own_rfd = l[REF].c.own_rfd = 0;
     if (attach_lacks(b, "tcp", "pipelined TCP")) {
         rc = 0;
         goto cleanup;
@@ -1117,7 +1003,7 @@ cleanup:
                 done ? count[REF] / secs[REF] : NAN, 0);
     set_target(r, T_GE, 0.8, 1, "ratio >= 0.8");
     for (s = 0; s < 2; s++)
-        if (l[s].fd >= 0)
+        if (l[s].c.fd >= 0)
             link_close(&l[s]);
     return rc;
 }
@@ -1137,8 +1023,8 @@ static int bench_jitter(struct bench *b)
     int epfd = -1, s, rc = -1, done = 0;
     struct row *r;
 
-    l[EMU].fd = l[REF].fd = -1;
-    l[EMU].own_rfd = l[REF].own_rfd = 0;
+    l[EMU].c.fd = l[REF].c.fd = -1;
+    l[EMU].c.own_rfd = l[REF].c.own_rfd = 0;
     if (attach_lacks(b, "tcp", "43h stream")) {
         rc = 0;
         goto cleanup;
@@ -1151,7 +1037,7 @@ static int bench_jitter(struct bench *b)
 
         iv[s] = malloc(cap * sizeof(double));
         if (!iv[s] || open_link(b, &l[s], s, L_TCP) < 0 ||
-            epoll_ctl(epfd, EPOLL_CTL_ADD, l[s].rfd, &ev) < 0)
+            epoll_ctl(epfd, EPOLL_CTL_ADD, l[s].c.rfd, &ev) < 0)
             goto cleanup;
     }
     /* Both streams at once, in one epoll: half the wall time, and the
@@ -1176,19 +1062,16 @@ static int bench_jitter(struct bench *b)
             }
         ne = epoll_wait(epfd, ev, 2, 100);
         for (i = 0; i < ne; i++) {
-            struct frame f;
+            struct wsg_client_frame f;
             long got;
             int k;
 
             s = (int)ev[i].data.u32;
-            got = link_fill(&l[s]);
-            if (got == -EAGAIN)
+            got = link_read(&l[s]);
+            if (got == 0)
                 continue;
-            if (got <= 0) {
-                msg("%s: %s", l[s].who,
-                    got == 0 ? "connection closed" : strerror((int)-got));
+            if (got < 0)
                 goto cleanup;
-            }
             now = now_ns();
             while ((k = link_recv(&l[s], &f, 0)) == 1) {
                 if (check_width(&l[s], &f) < 0)
@@ -1217,7 +1100,7 @@ cleanup:
     add_row(b, "43h stream intervals (count)", done ? (double)n[EMU] : NAN,
             done ? (double)n[REF] : NAN, 0);
     for (s = 0; s < 2; s++) {
-        if (l[s].fd >= 0)
+        if (l[s].c.fd >= 0)
             link_close(&l[s]); /* ends the stream with the connection */
         free(iv[s]);
     }
@@ -1273,8 +1156,8 @@ static int bench_slow_stream(struct bench *b)
     int s, rc = -1;
     struct row *r;
 
-    l[EMU].fd = l[REF].fd = -1;
-    l[EMU].own_rfd = l[REF].own_rfd = 0;
+    l[EMU].c.fd = l[REF].c.fd = -1;
+    l[EMU].c.own_rfd = l[REF].c.own_rfd = 0;
     if (attach_lacks(b, "tcp", "1 s stream") ||
         attach_nopid(b, "the emulator's wakes with a 1 s stream")) {
         rc = 0;
@@ -1303,7 +1186,7 @@ cleanup:
     r = add_row(b, "1 s stream, idle: wakes/s", w[EMU], w[REF], 2);
     set_target(r, T_LT, 2, 0, "~1");
     for (s = 0; s < 2; s++)
-        if (l[s].fd >= 0)
+        if (l[s].c.fd >= 0)
             link_close(&l[s]);
     return rc;
 }
@@ -1353,7 +1236,7 @@ static int bench_moving(struct bench *b)
     struct link l, ctl;
     uint8_t dir = 0, pl[9];
     double rate = NAN, ovr = NAN, cpu = NAN;
-    struct frame f;
+    struct wsg_client_frame f;
     int st, rc = -1;
     char *c = field(b->srv[EMU].line, "control");
     struct sockaddr_in sa;
@@ -1402,8 +1285,7 @@ cleanup:
     set_target(r, T_EQ, 0, 0, "0");
     add_row(b, "moving: CPU % of one core", cpu, NOT_APPLIED, 1);
     link_close(&l);
-    if (ctl.fd >= 0)
-        close(ctl.fd);
+    wsg_client_close(&ctl.c);
     free(c);
     return rc;
 }
@@ -1428,7 +1310,7 @@ static int scale_up(struct link *ctl, char *prior, size_t cap, int *scaled)
     snprintf(prior, cap, "%.17g", v);
     snprintf(live_restore, sizeof live_restore, "time scale %s\n", prior);
     live_restore_len = strlen(live_restore);
-    live_ctl = ctl->fd;
+    live_ctl = ctl->c.fd;
     *scaled = 1;
     if (ctl_cmd(ctl, "time scale 100", line, sizeof line) < 0)
         return -1;
@@ -1544,8 +1426,7 @@ cleanup:
     link_close(&l);
     if (scaled && scale_back(&ctl, prior) < 0)
         rc = -1;
-    if (ctl.fd >= 0)
-        close(ctl.fd);
+    wsg_client_close(&ctl.c);
     if (started && server_stop(&s) < 0)
         rc = -1;
 row:
@@ -1634,20 +1515,17 @@ static int fleet_wait(struct fleet *f, long lo, long hi, const struct await *w,
         ne = epoll_wait(f->epfd, ev, 64, 100);
         for (e = 0; e < ne; e++) {
             struct link *l;
-            struct frame fr;
+            struct wsg_client_frame fr;
             long got;
             int k, j;
 
             i = (long)ev[e].data.u64;
             l = &f->l[i];
-            got = link_fill(l);
-            if (got == -EAGAIN)
+            got = link_read(l);
+            if (got == 0)
                 continue;
-            if (got <= 0) {
-                msg("%s: %s", l->who,
-                    got == 0 ? "connection closed" : strerror((int)-got));
+            if (got < 0)
                 return -1;
-            }
             while ((k = link_recv(l, &fr, 0)) == 1) {
                 if (i < lo || i >= hi)
                     continue;
@@ -1750,7 +1628,7 @@ static int bench_fleet(struct bench *b)
     f.l = calloc((size_t)f.n, sizeof *f.l);
     f.got = calloc((size_t)f.n, 1);
     for (i = 0; f.l && i < f.n; i++)
-        f.l[i].fd = f.l[i].rfd = -1;
+        f.l[i].c.fd = f.l[i].c.rfd = -1;
     tcp = field(f.s.line, "tcp");
     c = field(f.s.line, "control");
     f.epfd = epoll_create1(EPOLL_CLOEXEC);
@@ -1781,7 +1659,7 @@ static int bench_fleet(struct bench *b)
             goto cleanup;
         }
         if (link_tcp(&f.l[i], &sa) < 0 ||
-            epoll_ctl(f.epfd, EPOLL_CTL_ADD, f.l[i].rfd, &ev) < 0)
+            epoll_ctl(f.epfd, EPOLL_CTL_ADD, f.l[i].c.rfd, &ev) < 0)
             goto cleanup;
         p = strchr(p, ',');
         p = p ? p + 1 : NULL;
@@ -1809,10 +1687,9 @@ cleanup:
     if (started && server_stop(&f.s) < 0)
         rc = -1;
     for (i = 0; f.l && i < f.n; i++)
-        if (f.l[i].fd >= 0)
-            close(f.l[i].fd);
-    if (f.ctl.fd >= 0)
-        close(f.ctl.fd);
+        if (f.l[i].c.fd >= 0)
+            close(f.l[i].c.fd);
+    wsg_client_close(&f.ctl.c);
     if (f.epfd >= 0)
         close(f.epfd);
 rows:

@@ -428,16 +428,6 @@ int wsg_client_final(struct wsg_client *c, struct wsg_client_frame *f,
     return 1;
 }
 
-int wsg_client_motion(struct wsg_client *c, uint8_t id, const void *payload,
-                      size_t len, struct wsg_client_frame *f, int reply_ms,
-                      int final_ms)
-{
-    int r = wsg_client_request(c, id, payload, len, f,
-                               wsg_client_deadline(reply_ms));
-
-    return r != 1 ? r : wsg_client_final(c, f, wsg_client_deadline(final_ms));
-}
-
 /* ---- lines ---- */
 
 int wsg_client_line_send(struct wsg_client *c, const char *text)

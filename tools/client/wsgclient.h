@@ -143,12 +143,6 @@ int wsg_client_request(struct wsg_client *c, uint8_t id, const void *payload,
  * With any other status in *f, 1 at once. Same returns. */
 int wsg_client_final(struct wsg_client *c, struct wsg_client_frame *f,
                      uint64_t deadline);
-/* A motion command: request (reply_ms), and through E_CMD_PENDING to its
- * final result (final_ms from the immediate reply). Same returns. */
-int wsg_client_motion(struct wsg_client *c, uint8_t id, const void *payload,
-                      size_t len, struct wsg_client_frame *f, int reply_ms,
-                      int final_ms);
-
 /* Fill a frame from an ID and payload (len at most the frame's). */
 void wsg_client_frame_set(struct wsg_client_frame *f, uint8_t id,
                           const uint8_t *payload, size_t len);
