@@ -308,6 +308,7 @@ void wsg_client_frame_set(struct wsg_client_frame *f, uint8_t id,
     f->len = (uint16_t)len;
     memcpy(f->payload, payload, len);
     f->status = len >= 2 ? wsg_get_u16(payload) : 0xFFFFu;
+    f->t_ns = wsg_client_now_ns();
 }
 
 /* The next frame of what is buffered: 1, 0 when the buffer is used up,

@@ -36,6 +36,7 @@ struct wsg_client_frame {
     uint8_t id;
     uint16_t len;    /* payload length */
     unsigned status; /* a reply's status (payload 0..1); 0xFFFF if shorter */
+    uint64_t t_ns;   /* wsg_client_now_ns() when it was parsed */
     uint8_t payload[WSG_REPLY_PAYLOAD_MAX];
 };
 /* The parameters after the status. */
