@@ -128,8 +128,8 @@ long wsg_client_read(struct wsg_client *c);
 int wsg_client_fill(struct wsg_client *c, uint64_t deadline);
 
 /* Next frame: kept ones first, then what is buffered, then the wire until
- * deadline (a deadline passed already, e.g. 0: only what is buffered). 1,
- * 0 on timeout, or -errno. */
+ * deadline (one look at the wire when it has passed already; deadline 0:
+ * only what is buffered). 1, 0 on timeout, or -errno. */
 int wsg_client_recv(struct wsg_client *c, struct wsg_client_frame *f,
                     uint64_t deadline);
 /* Next frame with this ID; the others are kept. Same returns. */
