@@ -1,5 +1,5 @@
 #!/bin/sh
-# Smoke test of wsgbench (tools/wsgbench.c), two --quick runs:
+# Smoke test of wsgbench (tools/wsgbench/), two --quick runs:
 #  1. against the wsgemu and wsgref it finds beside itself;
 #  2. attached (--attach READY --pid PID, --no-fleet) to a wsgemu this
 #     script starts, with every interface, so no row may be n/a either.

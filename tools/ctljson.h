@@ -1,7 +1,8 @@
 /*
  * What the command-line tools share for the emulator's control channel:
  * reading a number out of its one-line JSON answers ("state", "stats").
- * Header-only, since each tool is one file linking only the core library.
+ * Header-only and apart from the client library (wsgclient.h), which
+ * moves lines without reading them.
  */
 #ifndef WSG_TOOLS_CTLJSON_H
 #define WSG_TOOLS_CTLJSON_H

@@ -18,6 +18,7 @@
 #include <netinet/tcp.h>
 #include <poll.h>
 #include <signal.h>
+#include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -499,17 +500,7 @@ const char *emu_exe(int argc, char **argv)
 
 /* ---- frames ---- */
 
-static void frame_fill(struct emu_frame *f, uint8_t id, const uint8_t *p,
-                       size_t len)
-{
-    f->id = id;
-    f->len = (uint16_t)len;
-    memcpy(f->payload, p, len);
-    f->status = len >= 2 ? wsg_get_u16(p) : 0xFFFFu;
-    f->t_ms = emu_now_ms();
-}
-
-int emu_packet_decode(const uint8_t *buf, size_t n, struct emu_frame *f)
+int emu_packet_decode(const uint8_t *buf, size_t n, struct wsg_client_frame *f)
 {
     if (n < WSG_HEADER_LEN + WSG_CRC_LEN)
         return -1;
@@ -522,7 +513,7 @@ int emu_packet_decode(const uint8_t *buf, size_t n, struct emu_frame *f)
         return -1;
     if (wsg_crc_update(WSG_CRC_INIT, buf, n) != 0)
         return -1;
-    frame_fill(f, buf[3], buf + WSG_HEADER_LEN, size);
+    wsg_client_frame_set(f, buf[3], buf + WSG_HEADER_LEN, size);
     return 0;
 }
 
@@ -648,19 +639,48 @@ const struct emu_transport *const emu_transports[] = {
 
 /* ---- clients ---- */
 
+/* The transport as the client library's hooks. */
+static long hook_read(void *ctx, uint8_t *buf, size_t cap, int timeout_ms)
+{
+    struct emu_client *c = ctx;
+
+    return c->fd < 0 ? -2 : c->tp->recv(c, buf, cap, timeout_ms);
+}
+
+static int hook_send(void *ctx, const uint8_t *pkt, size_t len)
+{
+    return emu_send_raw(ctx, pkt, len);
+}
+
+/* A malformed packet is said and counted (link.bad), and skipped. */
+static int report_bad(struct wsg_client *l, enum wsg_parse_event ev,
+                      uint8_t id)
+{
+    (void)l;
+    fprintf(stderr, "emu: received a %s packet, ID %02Xh\n",
+            ev == WSG_PARSE_BAD_CRC ? "bad-checksum" : "oversize",
+            (unsigned)id);
+    return 0;
+}
+
 int emu_open_nth(struct emu_client *c, struct emu *e,
                  const struct emu_transport *tp, unsigned n)
 {
     char addr[1024];
     char *p, *comma;
 
-    memset(c, 0, sizeof(*c));
+    memset(c, 0, offsetof(struct emu_client, link));
     c->fd = -1;
     c->fd2 = -1;
     c->tp = tp;
     c->emu = e;
-    wsg_parser_init(&c->parser, 1); /* replies always carry a valid CRC */
-    wsg_parser_set_max(&c->parser, WSG_REPLY_PAYLOAD_MAX); /* Loop echo */
+    c->sync_token = 0;
+    wsg_client_init(&c->link, WSG_LINK_HOOKS);
+    c->link.hooks.read = hook_read;
+    c->link.hooks.send = hook_send;
+    c->link.hooks.ctx = c;
+    c->link.on_bad = report_bad;
+    wsg_client_keep(&c->link, c->keep, EMU_KEEP);
     if (!emu_field(e, tp->field, addr, sizeof(addr))) {
         fprintf(stderr, "emu: no %s= in the ready line \"%s\"\n", tp->field,
                 e->line);
@@ -688,11 +708,13 @@ int emu_open(struct emu_client *c, struct emu *e,
     return emu_open_nth(c, e, tp, 0);
 }
 
+/* Closed: what is buffered or kept can still be read, nothing more. */
 void emu_close(struct emu_client *c)
 {
     if (c->fd >= 0)
         c->tp->close(c, 0);
     c->fd = -1;
+    c->link.eof = 1;
 }
 
 void emu_abort(struct emu_client *c)
@@ -700,6 +722,7 @@ void emu_abort(struct emu_client *c)
     if (c->fd >= 0)
         c->tp->close(c, 1);
     c->fd = -1;
+    c->link.eof = 1;
 }
 
 int emu_send_raw(struct emu_client *c, const void *pkt, size_t len)
@@ -711,6 +734,7 @@ int emu_send_raw(struct emu_client *c, const void *pkt, size_t len)
 
 int emu_send(struct emu_client *c, uint8_t id, const void *payload, size_t len)
 {
+    /* Larger than any reply: tests send what the daemon must refuse. */
     uint8_t pkt[WSG_HEADER_LEN + 1024 + WSG_CRC_LEN];
     size_t n = wsg_frame_encode(pkt, sizeof(pkt), id, payload, len);
     if (n == 0) {
@@ -729,95 +753,33 @@ long emu_recv_raw(struct emu_client *c, uint8_t *buf, size_t cap,
     return c->tp->recv(c, buf, cap, timeout_ms);
 }
 
-/* Next frame off the wire (not the kept ones). 1, 0 timeout, -1 end. */
-static int next_wire(struct emu_client *c, struct emu_frame *f,
-                     double deadline)
-{
-    for (;;) {
-        while (c->in_off < c->in_len) {
-            enum wsg_parse_event ev;
-            struct wsg_frame fr;
-            c->in_off += wsg_parser_feed(&c->parser, c->in + c->in_off,
-                                         c->in_len - c->in_off, &ev, &fr);
-            if (ev == WSG_PARSE_FRAME) {
-                frame_fill(f, fr.id, fr.payload, fr.len);
-                c->seen[fr.id]++;
-                return 1;
-            }
-            if (ev == WSG_PARSE_BAD_CRC || ev == WSG_PARSE_OVERSIZE) {
-                c->bad++;
-                fprintf(stderr, "emu: received a %s packet, ID %02Xh\n",
-                        ev == WSG_PARSE_BAD_CRC ? "bad-checksum" : "oversize",
-                        (unsigned)fr.id);
-            }
-        }
-        if (c->eof || c->fd < 0)
-            return -1;
-        long n = c->tp->recv(c, c->in, sizeof(c->in), remaining_ms(deadline));
-        if (n == -1)
-            return 0;
-        if (n <= 0) {
-            c->eof = 1;
-            return -1;
-        }
-        c->in_off = 0;
-        c->in_len = (size_t)n;
-    }
-}
-
-static void keep_push(struct emu_client *c, const struct emu_frame *f)
-{
-    if (c->keep_n == EMU_KEEP) {
-        memmove(&c->keep[0], &c->keep[1], (EMU_KEEP - 1) * sizeof(c->keep[0]));
-        c->keep_n--;
-    }
-    c->keep[c->keep_n++] = *f;
-}
-
-static void keep_take(struct emu_client *c, unsigned i, struct emu_frame *f)
-{
-    *f = c->keep[i];
-    memmove(&c->keep[i], &c->keep[i + 1],
-            (c->keep_n - i - 1) * sizeof(c->keep[0]));
-    c->keep_n--;
-}
-
 void emu_drop_kept(struct emu_client *c)
 {
-    c->keep_n = 0;
+    c->link.keep_n = 0;
 }
 
-int emu_recv(struct emu_client *c, struct emu_frame *f, int timeout_ms)
+/* The library's 1 / 0 / -errno as this file's 1 / 0 / -1. */
+static int got(int r)
 {
-    if (c->keep_n > 0) {
-        keep_take(c, 0, f);
-        return 1;
-    }
-    return next_wire(c, f, emu_now_ms() + timeout_ms);
+    return r < 0 ? -1 : r;
 }
 
-int emu_recv_id(struct emu_client *c, uint8_t id, struct emu_frame *f,
+int emu_recv(struct emu_client *c, struct wsg_client_frame *f, int timeout_ms)
+{
+    return got(wsg_client_recv(&c->link, f, wsg_client_deadline(timeout_ms)));
+}
+
+int emu_recv_id(struct emu_client *c, uint8_t id, struct wsg_client_frame *f,
                 int timeout_ms)
 {
-    double deadline = emu_now_ms() + timeout_ms;
-    for (unsigned i = 0; i < c->keep_n; i++) {
-        if (c->keep[i].id == id) {
-            keep_take(c, i, f);
-            return 1;
-        }
-    }
-    for (;;) {
-        int r = next_wire(c, f, deadline);
-        if (r != 1 || f->id == id)
-            return r;
-        keep_push(c, f);
-    }
+    return got(
+        wsg_client_recv_id(&c->link, id, f, wsg_client_deadline(timeout_ms)));
 }
 
 int emu_request(struct emu_client *c, uint8_t id, const void *payload,
-                size_t len, struct emu_frame *f, int timeout_ms)
+                size_t len, struct wsg_client_frame *f, int timeout_ms)
 {
-    struct emu_frame tmp;
+    struct wsg_client_frame tmp;
     if (!f)
         f = &tmp;
     if (emu_send(c, id, payload, len) != 0)
@@ -829,15 +791,15 @@ int emu_request(struct emu_client *c, uint8_t id, const void *payload,
 
 int emu_sync(struct emu_client *c, int timeout_ms)
 {
-    double deadline = emu_now_ms() + timeout_ms;
+    uint64_t deadline = wsg_client_deadline(timeout_ms);
     uint8_t tok[6] = {'s', 'y', 'n', 'c', 0, 0};
-    struct emu_frame f;
+    struct wsg_client_frame f;
     c->sync_token++;
     wsg_put_u16(tok + 4, c->sync_token);
     if (emu_send(c, WSG_CMD_LOOP, tok, sizeof(tok)) != 0)
         return -1;
     for (;;) {
-        if (emu_recv_id(c, WSG_CMD_LOOP, &f, remaining_ms(deadline)) != 1)
+        if (wsg_client_recv_id(&c->link, WSG_CMD_LOOP, &f, deadline) != 1)
             return -1;
         if (f.status == WSG_E_SUCCESS && f.len == 2 + sizeof(tok) &&
             memcmp(EMU_PARAMS(&f), tok, sizeof(tok)) == 0)
@@ -849,7 +811,7 @@ int emu_sync(struct emu_client *c, int timeout_ms)
 
 int emu_get_flags(struct emu_client *c, uint32_t *flags)
 {
-    struct emu_frame f;
+    struct wsg_client_frame f;
     if (emu_request(c, WSG_CMD_GET_SYSTEM_STATE, NULL, 0, &f, EMU_REPLY_MS) !=
             WSG_E_SUCCESS ||
         f.len != 6)
@@ -860,7 +822,7 @@ int emu_get_flags(struct emu_client *c, uint32_t *flags)
 
 int emu_get_float(struct emu_client *c, uint8_t id, float *v)
 {
-    struct emu_frame f;
+    struct wsg_client_frame f;
     if (emu_request(c, id, NULL, 0, &f, EMU_REPLY_MS) != WSG_E_SUCCESS ||
         f.len != 6)
         return -1;
@@ -911,13 +873,13 @@ int emu_wait_float(struct emu_client *c, uint8_t id, float lo, float hi,
 int emu_motion(struct emu_client *c, uint8_t id, const void *payload,
                size_t len, int timeout_ms, int *immediate)
 {
-    struct emu_frame f;
+    struct wsg_client_frame f;
     int st = emu_request(c, id, payload, len, &f, EMU_REPLY_MS);
     if (immediate)
         *immediate = st;
     if (st != WSG_E_CMD_PENDING)
         return st;
-    if (emu_recv_id(c, id, &f, timeout_ms) != 1)
+    if (wsg_client_final(&c->link, &f, wsg_client_deadline(timeout_ms)) != 1)
         return -1;
     return (int)f.status;
 }

@@ -20,6 +20,7 @@
 #include <sys/types.h>
 
 #include "wsg/proto.h"
+#include "wsgclient.h"
 
 /* Every wait below is a failure bound, not an expectation: how long to
  * wait for what should come before calling it lost. A larger bound costs
@@ -106,22 +107,18 @@ int emu_run(const char *exe, const char *const *args, int timeout_ms,
 
 /* ---- frames ---- */
 
-struct emu_frame {
-    uint8_t id;
-    uint16_t len; /* payload length */
-    /* A reply's status (payload bytes 0..1); 0xFFFF if len < 2. */
-    unsigned status;
-    double t_ms; /* emu_now_ms() when it was taken off the wire */
-    uint8_t payload[WSG_REPLY_PAYLOAD_MAX];
-};
-/* The parameters after the status. */
-#define EMU_PARAMS(f)  ((f)->payload + 2)
-#define EMU_NPARAMS(f) ((f)->len >= 2 ? (f)->len - 2 : 0)
+/* Frames are the client library's (wsgclient.h): id, len, status and
+ * payload. The parameters after the status: */
+#define EMU_PARAMS(f)  WSG_CLIENT_PARAMS(f)
+#define EMU_NPARAMS(f) WSG_CLIENT_NPARAMS(f)
+/* When it was taken off the wire, on emu_now_ms()'s clock. */
+#define EMU_T_MS(f) ((double)(f)->t_ns / 1e6)
 
 /* Check that buf holds exactly one packet with a valid preamble, SIZE and
  * checksum (the CRC over all of it is 0) and decode it. Used for raw reads,
  * where the test wants the packet boundaries on the wire. Returns 0 or -1. */
-int emu_packet_decode(const uint8_t *buf, size_t n, struct emu_frame *f);
+int emu_packet_decode(const uint8_t *buf, size_t n,
+                      struct wsg_client_frame *f);
 
 /* ---- clients ---- */
 
@@ -168,14 +165,11 @@ struct emu_client {
     int fd;
     int fd2; /* a second socket where the transport needs one, else -1 */
     uint32_t tp_id; /* the transport's own: CAN command identifier */
-    int eof;
-    struct wsg_parser parser;
-    uint8_t in[4096];
-    size_t in_off, in_len;
-    unsigned seen[256]; /* good frames parsed, per ID, since open */
-    unsigned bad;       /* frames with a bad checksum or oversize */
-    struct emu_frame keep[EMU_KEEP];
-    unsigned keep_first, keep_n;
+    /* The receive side: the library's client over this transport's hooks.
+     * link.seen[] counts good frames per ID since open, link.bad the
+     * malformed ones, link.keep_n the frames kept, link.eof the end. */
+    struct wsg_client link;
+    struct wsg_client_frame keep[EMU_KEEP];
     uint16_t sync_token;
 };
 
@@ -200,16 +194,16 @@ long emu_recv_raw(struct emu_client *c, uint8_t *buf, size_t cap,
 
 /* Next frame in arrival order (kept ones first). 1: got one, 0: timeout,
  * -1: end of stream or error. */
-int emu_recv(struct emu_client *c, struct emu_frame *f, int timeout_ms);
+int emu_recv(struct emu_client *c, struct wsg_client_frame *f, int timeout_ms);
 /* Next frame with this ID; the others are kept. Same returns. */
-int emu_recv_id(struct emu_client *c, uint8_t id, struct emu_frame *f,
+int emu_recv_id(struct emu_client *c, uint8_t id, struct wsg_client_frame *f,
                 int timeout_ms);
 /* Forget the kept frames. */
 void emu_drop_kept(struct emu_client *c);
 /* Send and wait for the first frame with the same ID. Returns its status,
  * -1 on timeout or end of stream. f may be NULL. */
 int emu_request(struct emu_client *c, uint8_t id, const void *payload,
-                size_t len, struct emu_frame *f, int timeout_ms);
+                size_t len, struct wsg_client_frame *f, int timeout_ms);
 /* Barrier: send a Loop (06h) with a fresh token and wait for its echo.
  * Every packet the daemon queued for this connection before it read the
  * Loop has then been parsed (and counted in seen[]). 0 or -1. */

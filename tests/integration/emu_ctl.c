@@ -6,12 +6,9 @@
 
 #include <arpa/inet.h>
 #include <netinet/in.h>
-#include <poll.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/socket.h>
-#include <unistd.h>
 
 int ctl_open(struct ctl *c, const struct emu *e)
 {
@@ -19,8 +16,7 @@ int ctl_open(struct ctl *c, const struct emu *e)
     struct sockaddr_in sa;
     const char *colon;
 
-    c->len = 0;
-    c->fd = -1;
+    wsg_client_init(&c->link, WSG_LINK_TCP);
     if (!emu_field(e, "control", v, sizeof v))
         return -1;
     colon = strrchr(v, ':');
@@ -30,61 +26,25 @@ int ctl_open(struct ctl *c, const struct emu *e)
     sa.sin_family = AF_INET;
     sa.sin_port = htons((uint16_t)atoi(colon + 1));
     sa.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-    c->fd = socket(AF_INET, SOCK_STREAM, 0);
-    if (c->fd < 0)
-        return -1;
-    if (connect(c->fd, (struct sockaddr *)&sa, sizeof sa) < 0) {
-        close(c->fd);
-        c->fd = -1;
-        return -1;
-    }
-    return 0;
+    return wsg_client_open_tcp(&c->link, &sa, EMU_REPLY_MS) < 0 ? -1 : 0;
 }
 
 void ctl_close(struct ctl *c)
 {
-    if (c->fd >= 0)
-        close(c->fd);
-    c->fd = -1;
+    wsg_client_close(&c->link);
 }
 
 int ctl_write(struct ctl *c, const char *s)
 {
-    size_t n = strlen(s);
-
-    return send(c->fd, s, n, MSG_NOSIGNAL) == (ssize_t)n ? 0 : -1;
+    return wsg_client_line_send(&c->link, s) < 0 ? -1 : 0;
 }
 
-/* The next line (without its newline) into out; 0, or -1 on timeout or
- * end of stream. */
 int ctl_line(struct ctl *c, char *out, size_t cap)
 {
-    double end = emu_now_ms() + EMU_REPLY_MS;
-
-    for (;;) {
-        char *nl = memchr(c->buf, '\n', c->len);
-
-        if (nl) {
-            size_t n = (size_t)(nl - c->buf);
-            size_t k = n < cap - 1 ? n : cap - 1;
-
-            memcpy(out, c->buf, k);
-            out[k] = '\0';
-            memmove(c->buf, nl + 1, c->len - n - 1);
-            c->len -= n + 1;
-            return 0;
-        }
-        double left = end - emu_now_ms();
-        if (left <= 0 || c->len == sizeof c->buf)
-            return -1;
-        struct pollfd p = {.fd = c->fd, .events = POLLIN};
-        if (poll(&p, 1, (int)left + 1) <= 0)
-            continue;
-        ssize_t r = recv(c->fd, c->buf + c->len, sizeof c->buf - c->len, 0);
-        if (r <= 0)
-            return -1;
-        c->len += (size_t)r;
-    }
+    return wsg_client_line_read(&c->link, out, cap,
+                                wsg_client_deadline(EMU_REPLY_MS)) == 1
+               ? 0
+               : -1;
 }
 
 /* Send one command line and read its answer. */

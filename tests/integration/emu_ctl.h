@@ -1,6 +1,7 @@
 /*
  * A client of the daemon's control channel (--control) for the tests:
- * lines over TCP to the address of the ready line's control= field.
+ * lines over TCP to the address of the ready line's control= field, read
+ * by the client library's line client (wsgclient.h).
  */
 #ifndef WSG_TEST_EMU_CTL_H
 #define WSG_TEST_EMU_CTL_H
@@ -9,10 +10,9 @@
 
 #include "emu.h"
 
+/* The client library's line client over TCP. */
 struct ctl {
-    int fd;
-    char buf[8192];
-    size_t len;
+    struct wsg_client link;
 };
 
 /* Connect to control= of e's ready line. 0 or -1. */

@@ -115,7 +115,7 @@ static void single_recv(struct emu_client *c, uint8_t id, const uint8_t *p,
                         size_t len, size_t want_params)
 {
     uint8_t buf[2048];
-    struct emu_frame f;
+    struct wsg_client_frame f;
     REQUIRE(emu_send(c, id, p, len) == 0);
     long n = emu_recv_raw(c, buf, sizeof(buf), EMU_REPLY_MS);
     if (n != (long)(WSG_HEADER_LEN + 2 + want_params + WSG_CRC_LEN))
@@ -158,7 +158,7 @@ static void test_single_recv(struct emu *e)
 static void loop_raw(struct emu_client *c, const uint8_t *p, size_t len)
 {
     uint8_t buf[1024];
-    struct emu_frame f;
+    struct wsg_client_frame f;
     size_t want = WSG_HEADER_LEN + 2 + len + WSG_CRC_LEN, got = 0;
     REQUIRE(emu_send(c, WSG_CMD_LOOP, p, len) == 0);
     while (got < want) {
@@ -178,7 +178,7 @@ static void loop_raw(struct emu_client *c, const uint8_t *p, size_t len)
 static void test_loop(struct emu *e)
 {
     struct emu_client c;
-    struct emu_frame f;
+    struct wsg_client_frame f;
     uint8_t p[300];
     /* Payloads full of preamble bytes: a parser that hunts for AA AA AA
      * inside a packet instead of counting SIZE loses them. */
@@ -200,7 +200,7 @@ static void test_loop(struct emu *e)
              WSG_E_SUCCESS);
     CHECK_EQ(f.len, 2 + sizeof(tricky));
     CHECK(memcmp(EMU_PARAMS(&f), tricky, sizeof(tricky)) == 0);
-    CHECK_EQ(c.bad, 0);
+    CHECK_EQ(c.link.bad, 0);
     emu_close(&c);
 
     /* 255 and 256 bytes: the manual's maximum. */
@@ -221,8 +221,8 @@ static void test_loop(struct emu *e)
              WSG_E_SUCCESS);
     CHECK(f.len == 7 && memcmp(EMU_PARAMS(&f), "after", 5) == 0);
     /* Only those two replies came back. */
-    CHECK_EQ(c.seen[WSG_CMD_LOOP], 2);
-    CHECK_EQ(c.bad, 0);
+    CHECK_EQ(c.link.seen[WSG_CMD_LOOP], 2);
+    CHECK_EQ(c.link.bad, 0);
     emu_close(&c);
 }
 
@@ -275,7 +275,7 @@ static void test_unknown_id(struct emu *e)
 static void test_checksum(struct emu *e)
 {
     struct emu_client c;
-    struct emu_frame f;
+    struct wsg_client_frame f;
     uint8_t pkt[64];
     size_t n;
 
@@ -323,7 +323,7 @@ static void test_checksum(struct emu *e)
     CHECK_EQ(emu_request(&c, WSG_CMD_LOOP, "ok", 2, &f, EMU_REPLY_MS),
              WSG_E_SUCCESS);
     CHECK(f.len == 4 && memcmp(EMU_PARAMS(&f), "ok", 2) == 0);
-    CHECK_EQ(c.bad, 0);
+    CHECK_EQ(c.link.bad, 0);
     emu_request(&c, WSG_CMD_DISCONNECT, NULL, 0, NULL, EMU_REPLY_MS);
     emu_close(&c);
 }
@@ -333,7 +333,7 @@ static void test_no_crc(const char *exe)
     static const char *const args[] = {"--no-crc", NULL};
     struct emu e;
     struct emu_client c;
-    struct emu_frame f;
+    struct wsg_client_frame f;
     uint8_t pkt[64];
     size_t n;
 
@@ -360,7 +360,7 @@ static void test_no_crc(const char *exe)
     /* A valid checksum is fine too; every reply had a valid one. */
     CHECK_EQ(emu_request(&c, WSG_CMD_LOOP, "v", 1, &f, EMU_REPLY_MS),
              WSG_E_SUCCESS);
-    CHECK_EQ(c.bad, 0);
+    CHECK_EQ(c.link.bad, 0);
     emu_request(&c, WSG_CMD_DISCONNECT, NULL, 0, NULL, EMU_REPLY_MS);
     emu_close(&c);
     CHECK_EQ(emu_stop(&e), 0);
@@ -378,7 +378,7 @@ static void test_signals(const char *exe)
              WSG_E_SUCCESS);
     CHECK_EQ(emu_stop_sig(&e, SIGTERM), 0);
     /* The daemon is gone: the connection ends. */
-    struct emu_frame f;
+    struct wsg_client_frame f;
     CHECK_EQ(emu_recv(&c, &f, EMU_REPLY_MS), -1);
     emu_close(&c);
 

@@ -60,7 +60,7 @@ struct answer {
     size_t len;
     unsigned nframes;
     uint8_t frame_len[64];
-    struct emu_frame f;
+    struct wsg_client_frame f;
 };
 
 /* One answer packet off rx (filtered to the answer ID), frame by frame,
@@ -468,7 +468,7 @@ static void test_disconnect(struct emu *e)
         WSG_E_SUCCESS);
     CHECK_EQ(emu_get_flags(&c, &flags), 0);
     CHECK_EQ(flags & WSG_SF_FAST_STOP, 0);
-    CHECK_EQ(c.bad, 0);
+    CHECK_EQ(c.link.bad, 0);
     emu_close(&c);
 }
 

@@ -181,7 +181,7 @@ static uint32_t flags_of(struct emu_client *c)
 
 static int grasp_state_of(struct emu_client *c)
 {
-    struct emu_frame f;
+    struct wsg_client_frame f;
 
     if (emu_request(c, WSG_CMD_GET_GRASP_STATE, NULL, 0, &f, EMU_REPLY_MS) !=
             WSG_E_SUCCESS ||
@@ -278,7 +278,7 @@ static void test_errors(struct ctl *k)
 
 static void test_lockstep(struct emu_client *c, struct ctl *k)
 {
-    struct emu_frame f;
+    struct wsg_client_frame f;
     uint8_t dir = 0;
 
     CMD_OK(k, "time pause");
@@ -333,7 +333,7 @@ static void test_option_scale(const char *exe)
 
 static void test_part_lost(struct emu_client *c, struct ctl *k)
 {
-    struct emu_frame f;
+    struct wsg_client_frame f;
     uint8_t p[16];
     uint8_t keep = 0;
     int imm;
@@ -388,7 +388,7 @@ static void test_faults(struct emu_client *c, struct ctl *k)
     /* A power fault during a motion ends it. */
     uint8_t p[16];
     size_t n = emu_move_payload(p, 0, 100.0f, 10.0f);
-    struct emu_frame f;
+    struct wsg_client_frame f;
     int st = emu_request(c, WSG_CMD_PREPOSITION, p, n, NULL, EMU_REPLY_MS);
     if (st != WSG_E_CMD_PENDING)
         fprintf(stderr, "preposition: status %d, state %s\n", st,
@@ -436,7 +436,7 @@ static void send_batch(struct emu_client *c, const uint8_t *ids,
  * (41h) or u32/float (40h, 44h) in *v. */
 static int next_of(struct emu_client *c, uint8_t id, double *v)
 {
-    struct emu_frame f;
+    struct wsg_client_frame f;
     int r = emu_recv_id(c, id, &f, EMU_REPLY_MS);
 
     if (r != 1)
@@ -697,7 +697,7 @@ static void test_scale(struct emu_client *c, struct ctl *k)
 static void test_drop(struct emu *e, struct emu_client *c, struct ctl *k)
 {
     struct emu_client m;
-    struct emu_frame f;
+    struct wsg_client_frame f;
 
     char line[1024];
 
@@ -714,7 +714,7 @@ static void test_drop(struct emu *e, struct emu_client *c, struct ctl *k)
     CMD_OK(k, "time resume");
     /* The server closed: end of stream, not a timeout. */
     CHECK_EQ(emu_recv(c, &f, EMU_REPLY_MS), -1);
-    CHECK(c->eof);
+    CHECK(c->link.eof);
     emu_close(c);
 
     REQUIRE(emu_open(&m, e, &emu_tcp) == 0);
@@ -726,7 +726,7 @@ static void test_drop(struct emu *e, struct emu_client *c, struct ctl *k)
 static void test_reset(struct emu *e, struct ctl *k)
 {
     struct emu_client m;
-    struct emu_frame f;
+    struct wsg_client_frame f;
     float acc = 0;
     uint8_t p[4];
     float v = 500.0f;

@@ -87,12 +87,13 @@ static float start_slow_move(struct emu_client *c, struct emu_client *mon,
  * has no final result. */
 static void check_motion_denied(struct emu_client *m)
 {
-    unsigned s20 = m->seen[WSG_CMD_HOMING], s21 = m->seen[WSG_CMD_PREPOSITION];
+    unsigned s20 = m->link.seen[WSG_CMD_HOMING],
+             s21 = m->link.seen[WSG_CMD_PREPOSITION];
     CHECK_EQ(emu_motions_answer(m, WSG_E_ACCESS_DENIED), 0);
     CHECK_EQ(flags_of(m) & WSG_SF_MOVING, 0);
     REQUIRE(emu_sync(m, EMU_REPLY_MS) == 0);
-    CHECK_EQ(m->seen[WSG_CMD_HOMING] - s20, 1);
-    CHECK_EQ(m->seen[WSG_CMD_PREPOSITION] - s21, 1);
+    CHECK_EQ(m->link.seen[WSG_CMD_HOMING] - s20, 1);
+    CHECK_EQ(m->link.seen[WSG_CMD_PREPOSITION] - s21, 1);
 }
 
 /* Acknowledge (wrong key first) and show that motion works again. */
@@ -123,7 +124,7 @@ static double test_close_without_announce(struct emu *e, struct emu_client *m)
     /* 1. Closed (FIN) while moving: FAST STOP, and the motion stops. */
     REQUIRE(emu_open(&a, e, tp) == 0);
     float from = start_slow_move(&a, m, 20.0f);
-    unsigned m21 = m->seen[WSG_CMD_PREPOSITION];
+    unsigned m21 = m->link.seen[WSG_CMD_PREPOSITION];
     t0 = emu_now_ms();
     emu_close(&a);
     CHECK(fast_stop_within(m, EMU_REPLY_MS));
@@ -137,7 +138,7 @@ static double test_close_without_announce(struct emu *e, struct emu_client *m)
     check_motion_denied(m);
     CHECK_NEAR(width_of(m), w1, 0.01);
     /* The closed client's result was not sent to anyone else. */
-    CHECK_EQ(m->seen[WSG_CMD_PREPOSITION] - m21, 1);
+    CHECK_EQ(m->link.seen[WSG_CMD_PREPOSITION] - m21, 1);
     acknowledge(m);
 
     /* 2. Reset with unread data in flight (a crashed client). */
@@ -174,7 +175,7 @@ static double test_close_without_announce(struct emu *e, struct emu_client *m)
 static void test_announce(struct emu *e, struct emu_client *m, int window)
 {
     struct emu_client a;
-    struct emu_frame f;
+    struct wsg_client_frame f;
     uint8_t dir = 0;
 
     /* 07h takes no parameter (3.1.2). */
@@ -260,7 +261,7 @@ static void test_no_disconnect_fast_stop(const char *exe, int window)
         emu_request(&m, WSG_CMD_ACK_FAST_STOP, ack, 3, NULL, EMU_REPLY_MS),
         WSG_E_SUCCESS);
     CHECK(emu_wait_flags(&m, WSG_SF_FAST_STOP, 0, EMU_REPLY_MS, NULL) == 0);
-    CHECK_EQ(m.bad, 0);
+    CHECK_EQ(m.link.bad, 0);
     emu_close(&m); /* no 07h: harmless in this mode */
     CHECK_EQ(emu_stop(&e), 0);
 }
@@ -297,7 +298,7 @@ static void test_connectionless(struct emu *e)
     CHECK(emu_wait_flags(&a, WSG_SF_MOVING, 0, EMU_MOVE_MS, &fl) == 0);
     CHECK(fl & WSG_SF_TARGET_POS_REACHED);
     CHECK_NEAR(width_of(&a), 60.0, 0.1);
-    CHECK_EQ(a.bad, 0);
+    CHECK_EQ(a.link.bad, 0);
     emu_close(&a);
 }
 
@@ -334,7 +335,7 @@ int main(int argc, char **argv)
     if (window > emu_ms(3000))
         window = emu_ms(3000);
     test_announce(&e, &m, window);
-    CHECK_EQ(m.bad, 0);
+    CHECK_EQ(m.link.bad, 0);
     announce_and_close(&m);
     ctl_close(&k);
     CHECK_EQ(emu_stop(&e), 0);

@@ -98,7 +98,7 @@ static int start_fleet(struct emu *e, const char *exe, const char *ptydir,
 
 static uint32_t serial_of(struct emu_client *c)
 {
-    struct emu_frame f;
+    struct wsg_client_frame f;
 
     if (emu_request(c, WSG_CMD_GET_SYSTEM_INFO, NULL, 0, &f, EMU_REPLY_MS) !=
             WSG_E_SUCCESS ||
@@ -125,7 +125,7 @@ static int udp_width(unsigned port, unsigned reply)
     int ok = 0;
     size_t n;
     struct pollfd p;
-    struct emu_frame f;
+    struct wsg_client_frame f;
 
     if (fd < 0)
         return 0;
@@ -162,7 +162,7 @@ static void test_can(const char *exe)
     static const char *const extra[] = {"--grippers", "3", NULL};
     struct emu e;
     struct emu_client c[N];
-    struct emu_frame f;
+    struct wsg_client_frame f;
     char v[256], want[256];
     unsigned long id;
     uint8_t dir = WSG_HOME_POSITIVE;
@@ -193,8 +193,8 @@ static void test_can(const char *exe)
     CHECK(!(flags_of(&c[0]) & WSG_SF_REFERENCED));
     CHECK(!(flags_of(&c[2]) & WSG_SF_REFERENCED));
     /* Only gripper 1's client saw a homing result. */
-    CHECK_EQ(c[0].seen[WSG_CMD_HOMING], 0u);
-    CHECK_EQ(c[2].seen[WSG_CMD_HOMING], 0u);
+    CHECK_EQ(c[0].link.seen[WSG_CMD_HOMING], 0u);
+    CHECK_EQ(c[2].link.seen[WSG_CMD_HOMING], 0u);
     for (i = 0; i < N; i++)
         emu_close(&c[i]);
     CHECK_EQ(emu_stop(&e), 0);
@@ -217,7 +217,7 @@ static int run_local(const char *exe)
     char want[512], v[1024];
     struct emu e;
     struct emu_client c[N];
-    struct emu_frame f;
+    struct wsg_client_frame f;
     struct ctl k;
     unsigned tcp, udp, i;
     uint8_t dir = WSG_HOME_POSITIVE;
@@ -278,8 +278,8 @@ static int run_local(const char *exe)
     CHECK(flags_of(&c[2]) & WSG_SF_REFERENCED);
     CHECK(!(flags_of(&c[0]) & WSG_SF_REFERENCED));
     CHECK(!(flags_of(&c[1]) & WSG_SF_REFERENCED));
-    CHECK_EQ(c[0].seen[WSG_CMD_HOMING], 0u);
-    CHECK_EQ(c[1].seen[WSG_CMD_HOMING], 0u);
+    CHECK_EQ(c[0].link.seen[WSG_CMD_HOMING], 0u);
+    CHECK_EQ(c[1].link.seen[WSG_CMD_HOMING], 0u);
 
     /* The control channel acts on the gripper it selected. */
     CHECK(strcmp(ctl_cmd(&k, "gripper"), "ok gripper 0 of 3") == 0);
@@ -305,14 +305,14 @@ static int run_local(const char *exe)
      * and silent. */
     {
         uint8_t sub[3] = {0x01, 10, 0};
-        unsigned before = c[2].seen[WSG_CMD_GET_WIDTH];
+        unsigned before = c[2].link.seen[WSG_CMD_GET_WIDTH];
 
         CHECK_EQ(emu_request(&c[2], WSG_CMD_GET_WIDTH, sub, sizeof sub, NULL,
                              EMU_REPLY_MS),
                  WSG_E_SUCCESS);
         emu_sleep_ms(emu_ms(200));
         CHECK(emu_sync(&c[2], EMU_REPLY_MS) == 0);
-        CHECK(c[2].seen[WSG_CMD_GET_WIDTH] >= before + 10);
+        CHECK(c[2].link.seen[WSG_CMD_GET_WIDTH] >= before + 10);
         CHECK_EQ(ctl_json_num(ctl_cmd(&k, "stats"), "active"), 1);
         CHECK_EQ(emu_recv_id(&c[0], WSG_CMD_GET_WIDTH, &f, EMU_QUIET_MS), 0);
     }

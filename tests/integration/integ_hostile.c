@@ -83,7 +83,7 @@ static void prober_run(struct emu *e, int stop_fd, int res_fd)
         r.failed++;
     else {
         while (poll(&pfd, 1, PROBE_EVERY_MS) == 0) {
-            struct emu_frame f;
+            struct wsg_client_frame f;
             double t0 = emu_now_ms();
             int st =
                 emu_request(&c, WSG_CMD_GET_WIDTH, NULL, 0, &f, EMU_REPLY_MS);
@@ -215,7 +215,7 @@ static uint8_t rnd8(void)
 /* Read and parse whatever is there (answers to garbage), without waiting. */
 static long drain(struct emu_client *c)
 {
-    struct emu_frame f;
+    struct wsg_client_frame f;
     long n = 0;
 
     emu_drop_kept(c);
@@ -314,14 +314,14 @@ static void test_garbage(struct emu *e)
     memset(zeros, 0, sizeof zeros);
     blast(&c, zeros, sizeof zeros);
     CHECK(emu_sync(&c, EMU_REPLY_MS) == 0);
-    CHECK_EQ(c.bad, 0); /* every answer a valid packet */
+    CHECK_EQ(c.link.bad, 0); /* every answer a valid packet */
 
     /* A megabyte of preamble bytes: one long preamble (no command has the
      * ID AAh), nothing to answer; the packet after it is answered. */
     memset(buf, 0xAA, 1u << 20);
     blast(&c, buf, 1u << 20);
     CHECK(emu_sync(&c, EMU_REPLY_MS) == 0);
-    CHECK_EQ(c.keep_n, 0);
+    CHECK_EQ(c.link.keep_n, 0);
     /* Preambles with no packet after them, then a packet. */
     for (size_t i = 0; i + 4 <= (1u << 20); i += 4) {
         buf[i] = buf[i + 1] = buf[i + 2] = 0xAA;
@@ -338,7 +338,7 @@ static void test_garbage(struct emu *e)
     }
     blast(&c, zeros, sizeof zeros);
     CHECK(emu_sync(&c, emu_ms(10000)) == 0);
-    CHECK_EQ(c.bad, 0);
+    CHECK_EQ(c.link.bad, 0);
     CHECK_EQ(emu_request(&c, WSG_CMD_DISCONNECT, NULL, 0, NULL, EMU_REPLY_MS),
              WSG_E_SUCCESS);
     emu_close(&c);
@@ -351,7 +351,7 @@ static void test_size(struct emu *e)
     static const uint8_t big[][6] = {{0xAA, 0xAA, 0xAA, 0x06, 0xFF, 0xFF},
                                      {0xAA, 0xAA, 0xAA, 0x43, 0x01, 0x01}};
     struct emu_client c;
-    struct emu_frame f;
+    struct wsg_client_frame f;
 
     REQUIRE(emu_open(&c, e, &emu_tcp) == 0);
     for (size_t i = 0; i < sizeof big / sizeof big[0]; i++) {
@@ -362,7 +362,7 @@ static void test_size(struct emu *e)
         CHECK_EQ(f.status, WSG_E_CMD_FORMAT_ERROR);
         CHECK_EQ(f.len, 2);
         CHECK(emu_sync(&c, EMU_REPLY_MS) == 0);
-        CHECK_EQ(c.keep_n, 0);
+        CHECK_EQ(c.link.keep_n, 0);
     }
     CHECK_EQ(emu_request(&c, WSG_CMD_DISCONNECT, NULL, 0, NULL, EMU_REPLY_MS),
              WSG_E_SUCCESS);
@@ -373,7 +373,7 @@ static void test_cut(struct emu *e)
 {
     uint8_t inner[16], payload[40], pkt[64];
     struct emu_client c;
-    struct emu_frame f;
+    struct wsg_client_frame f;
     size_t ni, n, cut = WSG_HEADER_LEN + 5;
 
     /* A Loop whose payload holds a whole Get Opening Width packet: sent
@@ -395,7 +395,7 @@ static void test_cut(struct emu *e)
     CHECK_EQ(f.len, 2 + sizeof payload);
     CHECK(memcmp(EMU_PARAMS(&f), payload, sizeof payload) == 0);
     CHECK(emu_sync(&c, EMU_REPLY_MS) == 0);
-    CHECK_EQ(c.seen[WSG_CMD_GET_WIDTH], 0);
+    CHECK_EQ(c.link.seen[WSG_CMD_GET_WIDTH], 0);
 
     /* Cut and left alone, then closed: the daemon forgets it. */
     REQUIRE(emu_send_raw(&c, pkt, cut) == 0);
@@ -444,16 +444,17 @@ static void test_every_position(struct emu *e)
          * which the sync Loop brings. */
         CHECK(emu_sync(&c, EMU_REPLY_MS) == 0);
         if (want_id < 0) {
-            CHECK_EQ(c.keep_n, 0);
+            CHECK_EQ(c.link.keep_n, 0);
         } else {
-            CHECK_EQ(c.keep_n, 1);
-            if (c.keep_n >= 1) {
+            CHECK_EQ(c.link.keep_n, 1);
+            if (c.link.keep_n >= 1) {
                 CHECK_EQ(c.keep[0].id, want_id);
                 CHECK_EQ(c.keep[0].status, want_status);
             }
         }
-        if (c.keep_n != (want_id < 0 ? 0u : 1u))
-            fprintf(stderr, "  byte %zu flipped: %u answers\n", i, c.keep_n);
+        if (c.link.keep_n != (want_id < 0 ? 0u : 1u))
+            fprintf(stderr, "  byte %zu flipped: %u answers\n", i,
+                    c.link.keep_n);
         emu_drop_kept(&c);
     }
     CHECK_EQ(emu_request(&c, WSG_CMD_DISCONNECT, NULL, 0, NULL, EMU_REPLY_MS),
@@ -471,7 +472,7 @@ static void test_slow_and_deaf(struct emu *e)
         WSG_CMD_GET_SPEED, WSG_CMD_GET_FORCE};
     uint8_t sub[3] = {0x01, 1, 0}; /* auto update, every 1 ms */
     struct emu_client slow;
-    struct emu_frame f;
+    struct wsg_client_frame f;
     struct prober p;
     uint8_t pkt[16], req[16];
     size_t n = packet(pkt, sizeof pkt, WSG_CMD_LOOP, NULL, 0), sent = 0;
@@ -590,7 +591,7 @@ static void test_cycles(struct emu *e)
 static void test_crowd(struct emu *e)
 {
     struct emu_client *cs = calloc(CROWD, sizeof *cs);
-    struct emu_frame f;
+    struct wsg_client_frame f;
     int answered = 0;
 
     REQUIRE(cs != NULL);
@@ -675,7 +676,7 @@ static void test_udp_flood(struct emu *e)
     answers = drain(&u);
     (void)answers;
     close(fd);
-    CHECK_EQ(u.bad, 0);
+    CHECK_EQ(u.link.bad, 0);
     /* The UDP interface itself is still there. */
     CHECK(emu_sync(&u, EMU_REPLY_MS) == 0);
     emu_close(&u);

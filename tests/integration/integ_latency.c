@@ -74,7 +74,7 @@ static long long now_us(struct ctl *k)
  * would be on its way already). */
 static void quiet(struct emu_client *c)
 {
-    struct emu_frame f;
+    struct wsg_client_frame f;
 
     CHECK_EQ(emu_recv(c, &f, 100), 0);
 }
@@ -97,7 +97,7 @@ static void start(struct emu *e, const char *const *args)
 /* One request on c: nothing after MS - 1 steps, the answer after MS. */
 static void check_exact(struct emu_client *c, struct ctl *k, int ms)
 {
-    struct emu_frame f;
+    struct wsg_client_frame f;
     long long t0 = now_us(k);
 
     REQUIRE(emu_send(c, WSG_CMD_GET_SYSTEM_STATE, NULL, 0) == 0);
@@ -134,7 +134,7 @@ static void send_loops(struct emu_client *c, int n)
 /* n Loop answers, in order. */
 static void recv_loops(struct emu_client *c, int n)
 {
-    struct emu_frame f;
+    struct wsg_client_frame f;
     int i;
 
     for (i = 0; i < n; i++) {
@@ -155,7 +155,7 @@ static void test_exact(const char *logdir)
     const uint8_t get[] = {WSG_CMD_GET_SYSTEM_STATE, WSG_CMD_GET_GRASP_STATE,
                            WSG_CMD_GET_WIDTH, WSG_CMD_GET_SPEED,
                            WSG_CMD_GET_FORCE};
-    struct emu_frame f;
+    struct wsg_client_frame f;
     uint8_t buf[128];
     size_t i, len = 0;
 
@@ -229,7 +229,7 @@ static void jitter_run(int *ms)
     struct emu e;
     struct emu_client c;
     struct ctl k;
-    struct emu_frame f;
+    struct wsg_client_frame f;
     int i;
 
     start(&e, args);
@@ -282,7 +282,7 @@ static void test_stream(void)
     struct emu e;
     struct emu_client c;
     struct ctl k;
-    struct emu_frame f;
+    struct wsg_client_frame f;
     uint8_t p[3];
     int i;
 
@@ -326,7 +326,7 @@ static void test_bound(void)
     struct emu e;
     struct emu_client c;
     struct ctl k;
-    struct emu_frame f;
+    struct wsg_client_frame f;
     uint8_t p[3];
     /* 43h answers are 14 bytes; 64 KiB of them wait. */
     const int fit = 65536 / 14;
@@ -361,7 +361,7 @@ static void test_bound(void)
         CHECK_EQ(f.id, WSG_CMD_GET_WIDTH);
     }
     quiet(&c);
-    CHECK_EQ(c.bad, 0);
+    CHECK_EQ(c.link.bad, 0);
     CHECK_EQ(delayed(&k), 0);
     emu_close(&c);
     ctl_close(&k);
@@ -465,7 +465,7 @@ static void test_config(void)
     struct emu e;
     struct emu_client c;
     struct ctl k;
-    struct emu_frame f;
+    struct wsg_client_frame f;
 
     write_file(path, sizeof path, "# answer late\nlatency = 2\n");
     start(&e, args);

@@ -85,7 +85,7 @@ static void test_log(const char *dir)
     const char *args[] = {"--tcp", "127.0.0.1:0", "--log", path, NULL};
     struct emu e;
     struct emu_client c;
-    struct emu_frame f;
+    struct wsg_client_frame f;
     uint8_t pkt[32], home = 0;
     size_t n;
     int imm = -1;

@@ -100,7 +100,7 @@ static void send_more(struct client *k)
     }
 }
 
-static void take(struct client *k, const struct emu_frame *f)
+static void take(struct client *k, const struct wsg_client_frame *f)
 {
     struct expect *x;
 
@@ -157,7 +157,7 @@ int main(int argc, char **argv)
     static struct client ks[NCLIENTS];
     static const char *const extra[] = {"--acceleration", "5000", NULL};
     struct emu e;
-    struct emu_frame f;
+    struct wsg_client_frame f;
     int imm = 0;
     /* "can" (the CAN runner's argument): the same run over the one peer a
      * bus has; otherwise TCP, UDP and the pty at once. */
@@ -222,7 +222,7 @@ int main(int argc, char **argv)
         CHECK_EQ(k->answered, REQUESTS);
         CHECK_EQ(k->misorder, 0);
         CHECK_EQ(k->pending, 0);
-        CHECK_EQ(k->c.bad, 0);
+        CHECK_EQ(k->c.link.bad, 0);
         finals += k->finals;
         if (k->c.tp->connection)
             CHECK_EQ(emu_request(&k->c, WSG_CMD_DISCONNECT, NULL, 0, NULL,

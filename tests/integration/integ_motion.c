@@ -59,14 +59,14 @@ static void test_not_initialized(struct emu_client *a)
 {
     uint8_t p[16];
     size_t n = emu_move_payload(p, 0, 50.0f, 100.0f);
-    unsigned before = a->seen[WSG_CMD_PREPOSITION];
+    unsigned before = a->link.seen[WSG_CMD_PREPOSITION];
 
     CHECK_EQ(flags_of(a) & WSG_SF_REFERENCED, 0);
     CHECK_EQ(emu_request(a, WSG_CMD_PREPOSITION, p, n, NULL, EMU_REPLY_MS),
              WSG_E_NOT_INITIALIZED);
     /* An immediate error is the only packet: no final result follows. */
     REQUIRE(emu_sync(a, EMU_REPLY_MS) == 0);
-    CHECK_EQ(a->seen[WSG_CMD_PREPOSITION] - before, 1);
+    CHECK_EQ(a->link.seen[WSG_CMD_PREPOSITION] - before, 1);
 }
 
 /* Homing in direction dir; checks pending, the final result and the time
@@ -74,7 +74,7 @@ static void test_not_initialized(struct emu_client *a)
  * loaded machine may be longer, when the daemon falls behind). */
 static void homing(struct emu_client *c, uint8_t dir)
 {
-    struct emu_frame f;
+    struct wsg_client_frame f;
     long long s0 = ctl_time_us(ctl_cmd(&k, "time"));
     CHECK(s0 >= 0);
     CHECK_EQ(emu_request(c, WSG_CMD_HOMING, &dir, 1, &f, EMU_REPLY_MS),
@@ -104,7 +104,7 @@ static void test_homing(struct emu_client *a, struct emu_client *b)
     /* The other client saw nothing of it. */
     if (b) {
         REQUIRE(emu_sync(b, EMU_REPLY_MS) == 0);
-        CHECK_EQ(b->seen[WSG_CMD_HOMING], 0);
+        CHECK_EQ(b->link.seen[WSG_CMD_HOMING], 0);
     }
 
     /* From the open end to the closed one and back: each well within
@@ -123,7 +123,7 @@ static void test_homing(struct emu_client *a, struct emu_client *b)
 
     if (b) {
         REQUIRE(emu_sync(b, EMU_REPLY_MS) == 0);
-        CHECK_EQ(b->seen[WSG_CMD_HOMING], 0);
+        CHECK_EQ(b->link.seen[WSG_CMD_HOMING], 0);
     }
 }
 
@@ -150,12 +150,12 @@ static void test_manual_bytes(struct emu *e)
         CHECK_EQ(got, sizeof(done));
         CHECK(got == sizeof(done) && memcmp(buf, done, sizeof(done)) == 0);
     } else { /* bytes or frames: the parser checked them whole */
-        struct emu_frame f;
+        struct wsg_client_frame f;
         CHECK_EQ(emu_recv_id(&c, WSG_CMD_PREPOSITION, &f, EMU_REPLY_MS), 1);
         CHECK(f.len == 2 && memcmp(f.payload, pending + 6, 2) == 0);
         CHECK_EQ(emu_recv_id(&c, WSG_CMD_PREPOSITION, &f, EMU_MOVE_MS), 1);
         CHECK(f.len == 2 && memcmp(f.payload, done + 6, 2) == 0);
-        CHECK_EQ(c.bad, 0);
+        CHECK_EQ(c.link.bad, 0);
     }
     CHECK_NEAR(width_of(&c), 60.0, 0.1);
     announce_and_close(&c);
@@ -164,10 +164,12 @@ static void test_manual_bytes(struct emu *e)
 static void test_already_running(struct emu_client *a, struct emu_client *b)
 {
     uint8_t p[16];
-    struct emu_frame f;
-    unsigned a20 = a->seen[WSG_CMD_HOMING], a21 = a->seen[WSG_CMD_PREPOSITION];
-    unsigned a25 = a->seen[WSG_CMD_GRASP], a26 = a->seen[WSG_CMD_RELEASE];
-    unsigned b21 = b ? b->seen[WSG_CMD_PREPOSITION] : 0;
+    struct wsg_client_frame f;
+    unsigned a20 = a->link.seen[WSG_CMD_HOMING],
+             a21 = a->link.seen[WSG_CMD_PREPOSITION];
+    unsigned a25 = a->link.seen[WSG_CMD_GRASP],
+             a26 = a->link.seen[WSG_CMD_RELEASE];
+    unsigned b21 = b ? b->link.seen[WSG_CMD_PREPOSITION] : 0;
 
     /* From 60 mm to 10 mm at 20 mm/s: moving for over 2 s of simulated
      * time, which stands still from here until the Stop. */
@@ -215,12 +217,12 @@ static void test_already_running(struct emu_client *a, struct emu_client *b)
     REQUIRE(emu_sync(a, EMU_REPLY_MS) == 0);
     if (b)
         REQUIRE(emu_sync(b, EMU_REPLY_MS) == 0);
-    CHECK_EQ(a->seen[WSG_CMD_HOMING] - a20, 1);
-    CHECK_EQ(a->seen[WSG_CMD_PREPOSITION] - a21, 3);
-    CHECK_EQ(a->seen[WSG_CMD_GRASP] - a25, 1);
-    CHECK_EQ(a->seen[WSG_CMD_RELEASE] - a26, 1);
+    CHECK_EQ(a->link.seen[WSG_CMD_HOMING] - a20, 1);
+    CHECK_EQ(a->link.seen[WSG_CMD_PREPOSITION] - a21, 3);
+    CHECK_EQ(a->link.seen[WSG_CMD_GRASP] - a25, 1);
+    CHECK_EQ(a->link.seen[WSG_CMD_RELEASE] - a26, 1);
     if (b)
-        CHECK_EQ(b->seen[WSG_CMD_PREPOSITION] - b21, 1);
+        CHECK_EQ(b->link.seen[WSG_CMD_PREPOSITION] - b21, 1);
 
     /* Stop with a parameter: E_NO_PARAM_EXPECTED (3.2.3). */
     CHECK_EQ(emu_request(a, WSG_CMD_STOP, "x", 1, NULL, EMU_REPLY_MS),
@@ -246,7 +248,7 @@ static void test_clients(struct emu *e)
 {
     enum { N = 3 };
     struct emu_client c[N];
-    struct emu_frame f;
+    struct wsg_client_frame f;
     unsigned before[N];
 
     for (int i = 0; i < N; i++)
@@ -269,7 +271,7 @@ static void test_clients(struct emu *e)
     /* Client 1 moves; 0 and 2 keep asking for the state meanwhile and see
      * neither its pending nor its result. */
     for (int i = 0; i < N; i++)
-        before[i] = c[i].seen[WSG_CMD_PREPOSITION];
+        before[i] = c[i].link.seen[WSG_CMD_PREPOSITION];
     uint8_t p[16];
     size_t n = emu_move_payload(p, 0, 40.0f, 200.0f);
     REQUIRE(emu_request(&c[1], WSG_CMD_PREPOSITION, p, n, NULL,
@@ -295,14 +297,14 @@ static void test_clients(struct emu *e)
 
     for (int i = 0; i < N; i++)
         REQUIRE(emu_sync(&c[i], EMU_REPLY_MS) == 0);
-    CHECK_EQ(c[0].seen[WSG_CMD_PREPOSITION] - before[0], 0);
-    CHECK_EQ(c[1].seen[WSG_CMD_PREPOSITION] - before[1], 2);
-    CHECK_EQ(c[2].seen[WSG_CMD_PREPOSITION] - before[2], 0);
-    CHECK_EQ(c[0].seen[WSG_CMD_HOMING], 0);
-    CHECK_EQ(c[1].seen[WSG_CMD_HOMING], 0);
-    CHECK_EQ(c[2].seen[WSG_CMD_HOMING], 2);
+    CHECK_EQ(c[0].link.seen[WSG_CMD_PREPOSITION] - before[0], 0);
+    CHECK_EQ(c[1].link.seen[WSG_CMD_PREPOSITION] - before[1], 2);
+    CHECK_EQ(c[2].link.seen[WSG_CMD_PREPOSITION] - before[2], 0);
+    CHECK_EQ(c[0].link.seen[WSG_CMD_HOMING], 0);
+    CHECK_EQ(c[1].link.seen[WSG_CMD_HOMING], 0);
+    CHECK_EQ(c[2].link.seen[WSG_CMD_HOMING], 2);
     for (int i = 0; i < N; i++) {
-        CHECK_EQ(c[i].bad, 0);
+        CHECK_EQ(c[i].link.bad, 0);
         announce_and_close(&c[i]);
     }
 }
@@ -331,10 +333,10 @@ int main(int argc, char **argv)
     if (tp->single_peer)
         REQUIRE(emu_open(&a, &e, tp) == 0);
     test_already_running(&a, tp->single_peer ? NULL : &b);
-    CHECK_EQ(a.bad, 0);
+    CHECK_EQ(a.link.bad, 0);
     announce_and_close(&a);
     if (!tp->single_peer) {
-        CHECK_EQ(b.bad, 0);
+        CHECK_EQ(b.link.bad, 0);
         announce_and_close(&b);
         test_clients(&e);
     }

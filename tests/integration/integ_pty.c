@@ -163,7 +163,7 @@ static void test_ready_line(struct emu *e)
 static void test_round_trip(struct emu *e)
 {
     struct emu_client c;
-    struct emu_frame f;
+    struct wsg_client_frame f;
     float w = -1;
 
     REQUIRE(emu_open(&c, e, &emu_pty) == 0);
@@ -173,7 +173,7 @@ static void test_round_trip(struct emu *e)
     /* Power-up: the fingers at half the stroke. */
     CHECK_EQ(emu_get_float(&c, WSG_CMD_GET_WIDTH, &w), 0);
     CHECK_NEAR(w, 55.0, 0.01);
-    CHECK_EQ(c.bad, 0);
+    CHECK_EQ(c.link.bad, 0);
     emu_close(&c);
 }
 
@@ -214,7 +214,7 @@ static void test_homing(struct emu *e)
 static void test_reopen(struct emu *e)
 {
     struct emu_client c;
-    struct emu_frame f;
+    struct wsg_client_frame f;
     uint8_t p[16];
     uint32_t flags = 0;
     float w = 0;
@@ -230,7 +230,7 @@ static void test_reopen(struct emu *e)
               memcmp(EMU_PARAMS(&f), tok, strlen(tok)) == 0);
         CHECK_EQ(emu_get_flags(&c, &flags), 0);
         CHECK_EQ(flags & WSG_SF_FAST_STOP, 0);
-        CHECK_EQ(c.bad, 0);
+        CHECK_EQ(c.link.bad, 0);
         emu_close(&c);
     }
 
@@ -259,7 +259,7 @@ static void test_8n2_byte_reads(struct emu *e)
 {
     char path[256];
     struct termios tio;
-    struct emu_frame f;
+    struct wsg_client_frame f;
     uint8_t req[64], buf[64];
     double t0, dt;
     size_t n, got;
@@ -333,7 +333,7 @@ static void test_8n2_byte_reads(struct emu *e)
 static void test_stream_reopen(struct emu *e)
 {
     struct emu_client c;
-    struct emu_frame f;
+    struct wsg_client_frame f;
     uint8_t sub[3] = {0x01, 20, 0}; /* auto update, 20 ms */
     uint8_t buf[4096];
     unsigned before;
@@ -344,10 +344,10 @@ static void test_stream_reopen(struct emu *e)
     CHECK_EQ(
         emu_request(&c, WSG_CMD_GET_WIDTH, sub, sizeof sub, &f, EMU_REPLY_MS),
         WSG_E_SUCCESS);
-    before = c.seen[WSG_CMD_GET_WIDTH];
+    before = c.link.seen[WSG_CMD_GET_WIDTH];
     got = 0;
     while (emu_recv_id(&c, WSG_CMD_GET_WIDTH, &f, emu_ms(600)) == 1 &&
-           c.seen[WSG_CMD_GET_WIDTH] - before < 20)
+           c.link.seen[WSG_CMD_GET_WIDTH] - before < 20)
         got++;
     printf("stream: %zu packets\n", got);
     CHECK(got >= 15);
@@ -434,7 +434,7 @@ static void test_sigterm(const char *exe)
 {
     struct emu e;
     struct emu_client c;
-    struct emu_frame f;
+    struct wsg_client_frame f;
     char path[256];
     struct stat st;
 

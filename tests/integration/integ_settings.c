@@ -63,7 +63,7 @@ static void check_group1(const char *const *args)
 {
     struct emu e;
     struct emu_client c;
-    struct emu_frame f;
+    struct wsg_client_frame f;
     uint8_t dir = 0;
     int imm = -1;
 
@@ -95,7 +95,7 @@ static void check_group2(const char *const *args)
 {
     struct emu e;
     struct emu_client c;
-    struct emu_frame f;
+    struct wsg_client_frame f;
     uint8_t dir = 0, p[8];
     size_t n;
     int imm = -1;
@@ -134,7 +134,7 @@ static void check_force_sensor(const char *const *args)
 {
     struct emu e;
     struct emu_client c;
-    struct emu_frame f;
+    struct wsg_client_frame f;
     uint8_t dir = 0, p[8];
     size_t n = emu_grasp_payload(p, 40.0f, 100.0f);
     int imm = -1;
@@ -262,7 +262,7 @@ static void test_override(void)
         size_t n;
         const char *args[] = {"--config", path, NULL};
         const char *args_crc[] = {"--config", path, "--crc", "on", NULL};
-        struct emu_frame f;
+        struct wsg_client_frame f;
 
         n = wsg_frame_encode(pkt, sizeof pkt, WSG_CMD_LOOP,
                              (const uint8_t *)"ab", 2);

@@ -43,14 +43,14 @@ static unsigned value_len(uint8_t id)
 }
 
 /* A stream packet or reply as 3.4 defines it. */
-static void check_value_frame(const struct emu_frame *f)
+static void check_value_frame(const struct wsg_client_frame *f)
 {
     CHECK_EQ(f->status, WSG_E_SUCCESS);
     CHECK_EQ(f->len, value_len(f->id));
 }
 
 static int subscribe(struct emu_client *c, uint8_t id, uint8_t flags,
-                     uint16_t period, struct emu_frame *f)
+                     uint16_t period, struct wsg_client_frame *f)
 {
     uint8_t p[3];
     p[0] = flags;
@@ -65,18 +65,18 @@ static int subscribe(struct emu_client *c, uint8_t id, uint8_t flags,
 static unsigned unsubscribe(struct emu_client *c, uint8_t id)
 {
     uint8_t p[3] = {0, 0, 0};
-    unsigned before = c->seen[id];
+    unsigned before = c->link.seen[id];
     REQUIRE(emu_send(c, id, p, sizeof(p)) == 0);
     REQUIRE(emu_sync(c, EMU_REPLY_MS) == 0);
     emu_drop_kept(c);
-    return c->seen[id] - before;
+    return c->link.seen[id] - before;
 }
 
 /* Count packets of id (all others too, into *others) over ms. */
 static unsigned count_for(struct emu_client *c, uint8_t id, int ms,
                           unsigned *others)
 {
-    struct emu_frame f;
+    struct wsg_client_frame f;
     double deadline = emu_now_ms() + ms;
     unsigned n = 0, o = 0;
     for (;;) {
@@ -137,7 +137,7 @@ static void goodbye(struct emu_client *c)
 static void test_period(struct emu *e)
 {
     struct emu_client s;
-    struct emu_frame f;
+    struct wsg_client_frame f;
     double t[200], iv[200];
     unsigned n = 0;
 
@@ -156,7 +156,7 @@ static void test_period(struct emu *e)
             break;
         check_value_frame(&f);
         CHECK_NEAR(wsg_get_f32(EMU_PARAMS(&f)), 110.0, 0.5);
-        t[n++] = f.t_ms;
+        t[n++] = EMU_T_MS(&f);
     }
     double elapsed = emu_now_ms() - start;
     for (unsigned i = 1; i < n; i++)
@@ -166,7 +166,9 @@ static void test_period(struct emu *e)
            elapsed, med);
     CHECK(count_ok(n, elapsed / 20.0));
     CHECK(med >= 20 * 0.7 && med <= 20 * 1.3);
-    CHECK_EQ(s.seen[WSG_CMD_GET_SYSTEM_STATE] + s.seen[WSG_CMD_GET_SPEED], 0);
+    CHECK_EQ(s.link.seen[WSG_CMD_GET_SYSTEM_STATE] +
+                 s.link.seen[WSG_CMD_GET_SPEED],
+             0);
 
     /* FLAGS 0 ends it. */
     CHECK(unsubscribe(&s, WSG_CMD_GET_WIDTH) >= 1);
@@ -177,16 +179,16 @@ static void test_period(struct emu *e)
      * exactly, however loaded the machine. */
     CMD_OK(&k, "time pause");
     REQUIRE(subscribe(&s, WSG_CMD_GET_WIDTH, 0x01, 50, &f) == WSG_E_SUCCESS);
-    unsigned before = s.seen[WSG_CMD_GET_WIDTH];
+    unsigned before = s.link.seen[WSG_CMD_GET_WIDTH];
     CMD_OK(&k, "time step 400");
     REQUIRE(emu_sync(&s, EMU_REPLY_MS) == 0);
-    n = s.seen[WSG_CMD_GET_WIDTH] - before;
+    n = s.link.seen[WSG_CMD_GET_WIDTH] - before;
     CMD_OK(&k, "time step 49");
     REQUIRE(emu_sync(&s, EMU_REPLY_MS) == 0);
-    unsigned n49 = s.seen[WSG_CMD_GET_WIDTH] - before - n;
+    unsigned n49 = s.link.seen[WSG_CMD_GET_WIDTH] - before - n;
     CMD_OK(&k, "time step 1");
     REQUIRE(emu_sync(&s, EMU_REPLY_MS) == 0);
-    unsigned n50 = s.seen[WSG_CMD_GET_WIDTH] - before - n - n49;
+    unsigned n50 = s.link.seen[WSG_CMD_GET_WIDTH] - before - n - n49;
     printf("43h @50 ms: %u packets in 400 ms of simulated time, %u in the "
            "next 49 ms, %u in the 1 ms after\n",
            n, n49, n50);
@@ -198,14 +200,14 @@ static void test_period(struct emu *e)
     /* Ended: with time going on, nothing comes. */
     CMD_OK(&k, "time resume");
     CHECK_EQ(count_for(&s, WSG_CMD_GET_WIDTH, EMU_QUIET_MS, NULL), 0);
-    CHECK_EQ(s.bad, 0);
+    CHECK_EQ(s.link.bad, 0);
     goodbye(&s);
 }
 
 static void test_change_only(struct emu *e)
 {
     struct emu_client s;
-    struct emu_frame f;
+    struct wsg_client_frame f;
     float w[400];
     double tw[400];
     unsigned nw = 0, nflags = 0, ngs = 0;
@@ -255,12 +257,12 @@ static void test_change_only(struct emu *e)
             break;
         if (f.id == WSG_CMD_PREPOSITION) {
             CHECK_EQ(f.status, WSG_E_SUCCESS);
-            t_end = f.t_ms;
+            t_end = EMU_T_MS(&f);
             continue;
         }
         check_value_frame(&f);
         if (f.id == WSG_CMD_GET_WIDTH && nw < 400) {
-            tw[nw] = f.t_ms;
+            tw[nw] = EMU_T_MS(&f);
             w[nw++] = wsg_get_f32(EMU_PARAMS(&f));
         } else if (f.id == WSG_CMD_GET_SYSTEM_STATE) {
             nflags++;
@@ -328,14 +330,14 @@ static void test_change_only(struct emu *e)
         CHECK(fabsf(w[nw - 1] - now) < 0.01f + 1e-4f);
     CHECK_EQ(count_for(&s, 0, EMU_QUIET_MS, &others), 0);
     CHECK_EQ(others, 0);
-    CHECK_EQ(s.bad, 0);
+    CHECK_EQ(s.link.bad, 0);
     goodbye(&s);
 }
 
 static void test_several(struct emu *e)
 {
     struct emu_client s, o;
-    struct emu_frame f;
+    struct wsg_client_frame f;
     static const uint16_t periods[NSTREAMS] = {30, 40, 20, 30, 50};
     unsigned before[NSTREAMS];
 
@@ -349,11 +351,11 @@ static void test_several(struct emu *e)
                  WSG_E_SUCCESS);
         /* NOTES: clients expect the subscription's reply within 250 ms (on
          * a machine the time scale does not declare slower). */
-        CHECK(f.t_ms - t0 < emu_ms(250));
+        CHECK(EMU_T_MS(&f) - t0 < emu_ms(250));
         check_value_frame(&f);
     }
     for (unsigned i = 0; i < NSTREAMS; i++)
-        before[i] = s.seen[stream_ids[i]];
+        before[i] = s.link.seen[stream_ids[i]];
     double start = emu_now_ms();
 
     /* Requests in between: replies found by ID among the stream packets. */
@@ -400,7 +402,7 @@ static void test_several(struct emu *e)
     REQUIRE(emu_sync(&s, EMU_REPLY_MS) == 0);
     double elapsed = emu_now_ms() - start;
     for (unsigned i = 0; i < NSTREAMS; i++) {
-        unsigned got = s.seen[stream_ids[i]] - before[i];
+        unsigned got = s.link.seen[stream_ids[i]] - before[i];
         printf("%02Xh @%u ms: %u packets in %.0f ms\n",
                (unsigned)stream_ids[i], (unsigned)periods[i], got, elapsed);
         CHECK(count_ok(got, elapsed / periods[i]));
@@ -421,8 +423,8 @@ static void test_several(struct emu *e)
     /* The other connection never saw a stream packet. */
     REQUIRE(emu_sync(&o, EMU_REPLY_MS) == 0);
     for (unsigned i = 0; i < NSTREAMS; i++)
-        CHECK_EQ(o.seen[stream_ids[i]], 0);
-    CHECK_EQ(s.bad, 0);
+        CHECK_EQ(o.link.seen[stream_ids[i]], 0);
+    CHECK_EQ(s.link.bad, 0);
     goodbye(&s);
     goodbye(&o);
 }
@@ -438,7 +440,7 @@ static void test_one_time(struct emu *e)
     static const uint8_t *const payload[NV] = {NULL, flags0, flags2};
     static const size_t plen[NV] = {0, 3, 3};
     struct emu_client c[NV], m;
-    struct emu_frame f;
+    struct wsg_client_frame f;
 
     for (int v = 0; v < NV; v++) {
         REQUIRE(emu_open(&c[v], e, tp) == 0);
@@ -459,8 +461,8 @@ static void test_one_time(struct emu *e)
     for (int v = 0; v < NV; v++) {
         REQUIRE(emu_sync(&c[v], EMU_REPLY_MS) == 0);
         for (unsigned i = 0; i < NSTREAMS; i++)
-            CHECK_EQ(c[v].seen[stream_ids[i]], 1);
-        CHECK_EQ(c[v].bad, 0);
+            CHECK_EQ(c[v].link.seen[stream_ids[i]], 1);
+        CHECK_EQ(c[v].link.bad, 0);
         goodbye(&c[v]);
     }
 
@@ -481,7 +483,7 @@ static void test_one_time(struct emu *e)
 /* Subscribe to all five at period ms and wait until packets flow. */
 static void flood(struct emu_client *c, uint16_t period)
 {
-    struct emu_frame f;
+    struct wsg_client_frame f;
     for (unsigned i = 0; i < NSTREAMS; i++)
         REQUIRE(subscribe(c, stream_ids[i], 0x01, period, &f) ==
                 WSG_E_SUCCESS);
@@ -534,7 +536,7 @@ static void test_dropped(struct emu *e)
     CHECK_EQ(
         emu_request(&n, WSG_CMD_ACK_FAST_STOP, "ack", 3, NULL, EMU_REPLY_MS),
         WSG_E_SUCCESS);
-    CHECK_EQ(n.bad + n2.bad, 0);
+    CHECK_EQ(n.link.bad + n2.link.bad, 0);
     CHECK_EQ(emu_request(&n, WSG_CMD_DISCONNECT, NULL, 0, NULL, EMU_REPLY_MS),
              WSG_E_SUCCESS);
     CHECK_EQ(emu_request(&n2, WSG_CMD_DISCONNECT, NULL, 0, NULL, EMU_REPLY_MS),

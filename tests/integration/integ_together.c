@@ -27,7 +27,7 @@ int main(int argc, char **argv)
     const struct emu_transport *tps[N] = {&emu_tcp, &emu_udp, &emu_pty};
     struct emu e;
     struct emu_client c[N];
-    struct emu_frame f;
+    struct wsg_client_frame f;
     struct ctl k;
     char v[128];
     int i, j;
@@ -56,7 +56,7 @@ int main(int argc, char **argv)
         uint32_t fl;
 
         for (j = 0; j < N; j++)
-            before[j] = c[j].seen[WSG_CMD_HOMING];
+            before[j] = c[j].link.seen[WSG_CMD_HOMING];
         /* Each homing starts away from its end stop (55 mm, then at the
          * other end), so it moves. */
         CMD_OK(&k, "time pause");
@@ -78,9 +78,9 @@ int main(int argc, char **argv)
         for (j = 0; j < N; j++) {
             REQUIRE(emu_sync(&c[j], EMU_REPLY_MS) == 0);
             if (j == i)
-                CHECK_EQ(c[j].seen[WSG_CMD_HOMING] - before[j], 2);
+                CHECK_EQ(c[j].link.seen[WSG_CMD_HOMING] - before[j], 2);
             else /* its own E_ALREADY_RUNNING, nothing of the result */
-                CHECK_EQ(c[j].seen[WSG_CMD_HOMING] - before[j], 1);
+                CHECK_EQ(c[j].link.seen[WSG_CMD_HOMING] - before[j], 1);
         }
     }
     /* One gripper: the width the last homing left is everybody's. */
@@ -93,7 +93,7 @@ int main(int argc, char **argv)
         CHECK_NEAR(w[2], w[0], 1e-6);
     }
     for (i = 0; i < N; i++) {
-        CHECK_EQ(c[i].bad, 0);
+        CHECK_EQ(c[i].link.bad, 0);
         if (tps[i]->connection)
             CHECK_EQ(emu_request(&c[i], WSG_CMD_DISCONNECT, NULL, 0, NULL,
                                  EMU_REPLY_MS),

@@ -46,7 +46,7 @@ static void test_reply_port(struct emu *e)
 static void test_datagrams(struct emu *e)
 {
     struct emu_client c;
-    struct emu_frame f;
+    struct wsg_client_frame f;
     uint8_t dg[256];
     size_t n, m;
 
@@ -84,7 +84,8 @@ static void test_datagrams(struct emu *e)
     datagram(&c, dg, 3);
     /* Nothing else came of those; the next packet is answered as usual. */
     REQUIRE(emu_sync(&c, EMU_REPLY_MS) == 0);
-    CHECK_EQ(c.seen[WSG_CMD_LOOP], 4); /* one, three, split's error, sync */
+    CHECK_EQ(c.link.seen[WSG_CMD_LOOP],
+             4); /* one, three, split's error, sync */
     /* A complete packet after a cut one in the same datagram: the cut one
      * swallows what follows it (SIZE says so), so one answer: its error. */
     n = wsg_frame_encode(dg, sizeof dg, WSG_CMD_GET_SPEED, NULL, 0);
@@ -96,8 +97,8 @@ static void test_datagrams(struct emu *e)
     CHECK_EQ(f.id, WSG_CMD_GET_SPEED);
     CHECK_EQ(f.status, WSG_E_CMD_FORMAT_ERROR);
     REQUIRE(emu_sync(&c, EMU_REPLY_MS) == 0);
-    CHECK_EQ(c.seen[WSG_CMD_GET_SPEED], 1);
-    CHECK_EQ(c.bad, 0);
+    CHECK_EQ(c.link.seen[WSG_CMD_GET_SPEED], 1);
+    CHECK_EQ(c.link.bad, 0);
     emu_close(&c);
 }
 

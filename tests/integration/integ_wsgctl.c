@@ -387,7 +387,7 @@ static void test_udp_pty(struct env *v)
 static void test_control_read(struct env *v, struct emu *e)
 {
     struct emu_client c;
-    struct emu_frame f;
+    struct wsg_client_frame f;
     uint8_t p[16];
     size_t n = emu_move_payload(p, 0, 5.0f, 5.0f);
     char addr[64];

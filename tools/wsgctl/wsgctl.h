@@ -1,0 +1,130 @@
+/*
+ * What the files of wsgctl share: its exit statuses, the options, the link
+ * to the gripper, the context a command runs in, and the functions one
+ * file offers the others (grouped by the file that defines them, where
+ * each is described).
+ */
+#ifndef WSG_TOOLS_WSGCTL_H
+#define WSG_TOOLS_WSGCTL_H
+
+#include <signal.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+
+#include "ctljson.h"
+#include "wsg/device.h"
+#include "wsg/proto.h"
+#include "wsgclient.h"
+
+/* Exit statuses (documented in usage()). */
+#define EXIT_OK          0
+#define EXIT_GRIPPER     1 /* the gripper answered an error status */
+#define EXIT_USAGE       2
+#define EXIT_CONN        3 /* cannot connect, I/O error, no answer in time */
+#define EXIT_INTERRUPTED 130
+
+#define DEFAULT_TCP      "127.0.0.1:1000"
+#define DEFAULT_UDP_PORT 1501 /* where the gripper sends its UDP answers */
+
+/* Set by SIGINT/SIGTERM (main.c); a flag, since the handler may do
+ * nothing else. The link's waits end when it is raised. */
+extern volatile sig_atomic_t interrupted;
+
+/* LINK_CONTROL: the emulator's control channel, read only (see
+ * control_read). */
+enum link_kind { LINK_TCP, LINK_UDP, LINK_SERIAL, LINK_CONTROL };
+
+struct opts {
+    enum link_kind kind;
+    const char *addr;
+    double timeout_s;
+    int quiet;
+    int relative;
+    int stop_on_block;
+    int reset;
+    long count; /* watch: stop after this many values; 0: until SIGINT */
+};
+
+/* The link to the gripper, and whether its close was announced. */
+struct conn {
+    enum link_kind kind;
+    struct wsg_client l;
+    int announced; /* TCP: 07h sent, no second one */
+};
+
+struct ctx {
+    struct opts o;
+    struct conn c;
+    int have_conn;
+    const char *command; /* wsgctl's name of the command running */
+};
+
+typedef void (*pending_fn)(const struct opts *o,
+                           const struct wsg_client_frame *r);
+
+/* ---- options and their arguments; messages (main.c) ---- */
+
+void err(const char *fmt, ...);
+int parse_float(const char *s, float *v);
+int parse_ulong(const char *s, unsigned long max, unsigned long *v);
+int split_addr(const char *addr, char *host, size_t cap, unsigned long *port,
+               unsigned long *local);
+
+/* ---- the link (link.c) ---- */
+
+int conn_open(struct conn *c, const struct opts *o);
+int conn_send(struct conn *c, uint8_t id, const uint8_t *payload, size_t len);
+int conn_recv(struct conn *c, struct wsg_client_frame *r, uint64_t deadline);
+int recv_fail(int rc, uint8_t id, const struct opts *o);
+uint64_t timeout_deadline(const struct opts *o);
+int xact(struct ctx *x, uint8_t id, const uint8_t *payload, size_t len,
+         struct wsg_client_frame *r, pending_fn on_pending);
+void conn_close(struct conn *c);
+
+/* ---- commands (commands.c) ---- */
+
+int c_home(struct ctx *x, int argc, char **argv);
+int c_move(struct ctx *x, int argc, char **argv);
+int c_grasp(struct ctx *x, int argc, char **argv);
+int c_release(struct ctx *x, int argc, char **argv);
+int c_stop(struct ctx *x, int argc, char **argv);
+int c_fast_stop(struct ctx *x, int argc, char **argv);
+int c_ack(struct ctx *x, int argc, char **argv);
+int c_info(struct ctx *x, int argc, char **argv);
+int c_limits(struct ctx *x, int argc, char **argv);
+int c_state(struct ctx *x, int argc, char **argv);
+int c_width(struct ctx *x, int argc, char **argv);
+int c_speed(struct ctx *x, int argc, char **argv);
+int c_force(struct ctx *x, int argc, char **argv);
+int c_temperature(struct ctx *x, int argc, char **argv);
+int c_tag(struct ctx *x, int argc, char **argv);
+int c_acc(struct ctx *x, int argc, char **argv);
+int c_force_limit(struct ctx *x, int argc, char **argv);
+int c_soft_limits(struct ctx *x, int argc, char **argv);
+int c_overdrive(struct ctx *x, int argc, char **argv);
+int c_stats(struct ctx *x, int argc, char **argv);
+int c_loop(struct ctx *x, int argc, char **argv);
+int c_tare(struct ctx *x, int argc, char **argv);
+int c_bye(struct ctx *x, int argc, char **argv);
+int c_raw(struct ctx *x, int argc, char **argv);
+
+/* ---- watch (watch.c) ---- */
+
+int c_watch(struct ctx *x, int argc, char **argv);
+
+/* ---- printing what the gripper says; decode (decode.c) ---- */
+
+int print_values(const struct opts *o, const char *indent, uint8_t id,
+                 const uint8_t *p, size_t n);
+void print_hex(const uint8_t *p, size_t n);
+const char *cmd_name(uint8_t id);
+int gripper_error(uint8_t id, unsigned status);
+int c_decode(struct ctx *x, int argc, char **argv);
+
+/* ---- readings through the control channel (control.c) ---- */
+
+int control_read(struct ctx *x, uint8_t id, const uint8_t *payload,
+                 size_t len);
+
+#endif
