@@ -208,6 +208,38 @@ int wsg_axis_fast_stopped(const struct wsg_axis *ax);
 /* Moving or about to move: a new motion command gets E_ALREADY_RUNNING. */
 int wsg_axis_busy(const struct wsg_axis *ax);
 
+/* Reading the model: everyone outside the model reads its state through
+ * these. Each is a plain read of one value, cheap enough for the stream
+ * polling and the dispatcher's checks. */
+/* The configuration it was made with (limits, step length, sensor). */
+const struct wsg_axis_config *wsg_axis_cfg(const struct wsg_axis *ax);
+/* Simulated time in microseconds: steps taken and idle time advanced. */
+uint64_t wsg_axis_time(const struct wsg_axis *ax);
+/* The values the commands report: width (43h, as the gripper sees it,
+ * off by a wrong reference), speed (44h, signed), force (45h),
+ * temperature (46h, degC), grasping state (41h) and statistics (42h). */
+double wsg_axis_width(const struct wsg_axis *ax);
+double wsg_axis_speed(const struct wsg_axis *ax);
+double wsg_axis_force(const struct wsg_axis *ax);
+double wsg_axis_temperature(const struct wsg_axis *ax);
+enum wsg_grasp_state wsg_axis_grasp_state(const struct wsg_axis *ax);
+struct wsg_grasp_stats wsg_axis_stats(const struct wsg_axis *ax);
+/* Faults present (WSG_FAULTS bits): injected ones and the model's own
+ * temperature flags. */
+uint32_t wsg_axis_faults(const struct wsg_axis *ax);
+/* Homed: the commands that need a reference may run. */
+int wsg_axis_referenced(const struct wsg_axis *ax);
+/* Session settings. */
+double wsg_axis_acc(const struct wsg_axis *ax);
+double wsg_axis_force_limit(const struct wsg_axis *ax);
+/* 1 with the limits in *minus and *plus when soft limits are set, else 0
+ * with both untouched. */
+int wsg_axis_soft_limits(const struct wsg_axis *ax, double *minus,
+                         double *plus);
+/* 1 with its width and stiffness when a part is placed, else 0 with both
+ * untouched. */
+int wsg_axis_part(const struct wsg_axis *ax, double *width, double *stiffness);
+
 /* Requests. The motion requests validate against the current state and
  * return the immediate status (E_CMD_PENDING when accepted); speeds and
  * widths are clamped to the model's limits as the manual says. */
@@ -228,6 +260,13 @@ void wsg_axis_set_force_limit(struct wsg_axis *ax, double force);
 void wsg_axis_set_overdrive(struct wsg_axis *ax, int on);
 void wsg_axis_set_soft_limits(struct wsg_axis *ax, double minus, double plus);
 void wsg_axis_clear_soft_limits(struct wsg_axis *ax);
+/* Grasping statistics back to zero (42h with RESET). */
+void wsg_axis_clear_stats(struct wsg_axis *ax);
+
+/* Advance simulated time by nsteps steps without stepping. Only while
+ * wsg_axis_idle holds: then steps would change nothing but the time, so a
+ * caller may jump a quiet gap at once. */
+void wsg_axis_advance_idle(struct wsg_axis *ax, uint64_t nsteps);
 
 /* The world (control channel, tests). width < 0 removes the part. */
 void wsg_axis_set_part(struct wsg_axis *ax, double width, double stiffness);

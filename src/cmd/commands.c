@@ -34,7 +34,7 @@ static uint16_t wsg_cmd_disconnect(struct wsg_device *d, struct wsg_session *s,
         return WSG_E_NOT_AVAILABLE;
     s->announced = 1;
     /* 3.1.2: a movement in progress is aborted immediately. */
-    if (d->axis.motion.kind != WSG_MOTION_NONE || wsg_axis_busy(&d->axis))
+    if ((wsg_axis_flags(&d->axis) & WSG_SF_MOVING) || wsg_axis_busy(&d->axis))
         wsg_axis_request_stop(&d->axis);
     return WSG_E_SUCCESS;
 }
@@ -134,7 +134,7 @@ static uint16_t wsg_cmd_get_acc(struct wsg_device *d, struct wsg_session *s,
 {
     (void)s;
     (void)f;
-    return wsg_reply_f32(r, d->axis.acc);
+    return wsg_reply_f32(r, wsg_axis_acc(&d->axis));
 }
 
 static uint16_t wsg_cmd_set_force(struct wsg_device *d, struct wsg_session *s,
@@ -158,7 +158,7 @@ static uint16_t wsg_cmd_get_force_limit(struct wsg_device *d,
 {
     (void)s;
     (void)f;
-    return wsg_reply_f32(r, d->axis.force_limit);
+    return wsg_reply_f32(r, wsg_axis_force_limit(&d->axis));
 }
 
 static uint16_t wsg_cmd_set_soft_limits(struct wsg_device *d,
@@ -181,12 +181,14 @@ static uint16_t wsg_cmd_get_soft_limits(struct wsg_device *d,
                                         const struct wsg_frame *f,
                                         struct wsg_reply *r)
 {
+    double minus, plus;
+
     (void)s;
     (void)f;
-    if (!d->axis.soft_limits)
+    if (!wsg_axis_soft_limits(&d->axis, &minus, &plus))
         return WSG_E_NOT_AVAILABLE;
-    wsg_reply_f32(r, d->axis.soft_minus);
-    return wsg_reply_f32(r, d->axis.soft_plus);
+    wsg_reply_f32(r, minus);
+    return wsg_reply_f32(r, plus);
 }
 
 static uint16_t wsg_cmd_clear_soft_limits(struct wsg_device *d,
@@ -219,7 +221,7 @@ static uint16_t wsg_cmd_tare(struct wsg_device *d, struct wsg_session *s,
     (void)s;
     (void)f;
     (void)r;
-    if (!d->axis.cfg.force_sensor)
+    if (!wsg_axis_cfg(&d->axis)->force_sensor)
         return WSG_E_NOT_AVAILABLE;
     /* Only out of force control mode (3.3.9), which is what D9 shows:
      * the flag and the rule are one. */
@@ -250,6 +252,7 @@ static uint16_t wsg_cmd_stream(struct wsg_device *d, struct wsg_session *s,
 {
     enum wsg_stream_id sid = wsg_stream_of(f->id);
     struct wsg_stream *st = &s->streams[sid];
+    uint32_t step_us = wsg_axis_cfg(&d->axis)->step_us;
     float value;
 
     r->len = wsg_stream_value(d, sid, r->params, &value);
@@ -268,9 +271,9 @@ static uint16_t wsg_cmd_stream(struct wsg_device *d, struct wsg_session *s,
     st->change_only = (f->payload[0] >> 1) & 1u;
     /* PERIOD_MS 0 means as often as the model steps. */
     st->period_us = 1000u * wsg_get_u16(f->payload + 1);
-    if (st->period_us < d->axis.cfg.step_us)
-        st->period_us = d->axis.cfg.step_us;
-    st->due_us = d->axis.time_us + st->period_us;
+    if (st->period_us < step_us)
+        st->period_us = step_us;
+    st->due_us = wsg_axis_time(&d->axis) + st->period_us;
     st->last = value;
     return WSG_E_SUCCESS;
 }
@@ -280,17 +283,17 @@ static uint16_t wsg_cmd_grasp_stats(struct wsg_device *d,
                                     const struct wsg_frame *f,
                                     struct wsg_reply *r)
 {
-    struct wsg_grasp_stats *gs = &d->axis.stats;
+    struct wsg_grasp_stats gs = wsg_axis_stats(&d->axis);
 
     (void)s;
     if (f->len && (f->payload[0] & ~1u))
         return WSG_E_INVALID_PARAMETER;
-    wsg_put_u32(r->params, gs->total);
-    wsg_put_u16(r->params + 4, gs->no_part);
-    wsg_put_u16(r->params + 6, gs->lost_part);
+    wsg_put_u32(r->params, gs.total);
+    wsg_put_u16(r->params + 4, gs.no_part);
+    wsg_put_u16(r->params + 6, gs.lost_part);
     r->len = 8;
     if (f->len && (f->payload[0] & 1u))
-        memset(gs, 0, sizeof *gs); /* reset after reading */
+        wsg_axis_clear_stats(&d->axis); /* reset after reading */
     return WSG_E_SUCCESS;
 }
 
@@ -301,8 +304,8 @@ static uint16_t wsg_cmd_temperature(struct wsg_device *d,
 {
     (void)s;
     (void)f;
-    wsg_put_u16(r->params,
-                (uint16_t)(int16_t)lround(d->axis.temperature * 10));
+    wsg_put_u16(r->params, (uint16_t)(int16_t)lround(
+                               wsg_axis_temperature(&d->axis) * 10));
     r->len = 2;
     return WSG_E_SUCCESS;
 }
@@ -359,7 +362,7 @@ static uint16_t wsg_cmd_system_limits(struct wsg_device *d,
                                       const struct wsg_frame *f,
                                       struct wsg_reply *r)
 {
-    const struct wsg_axis_config *c = &d->axis.cfg;
+    const struct wsg_axis_config *c = wsg_axis_cfg(&d->axis);
 
     (void)s;
     (void)f;

@@ -189,6 +189,7 @@ size_t wsg_stream_value(const struct wsg_device *d, enum wsg_stream_id sid,
                         uint8_t *out, float *value)
 {
     const struct wsg_axis *ax = &d->axis;
+    enum wsg_grasp_state gs;
     uint32_t flags;
 
     switch (sid) {
@@ -198,17 +199,18 @@ size_t wsg_stream_value(const struct wsg_device *d, enum wsg_stream_id sid,
         *value = (float)flags; /* exact: the flags stay below 2^24 */
         return 4;
     case WSG_STREAM_GRASP_STATE:
-        out[0] = (uint8_t)ax->grasp_state;
-        *value = (float)ax->grasp_state;
+        gs = wsg_axis_grasp_state(ax);
+        out[0] = (uint8_t)gs;
+        *value = (float)gs;
         return 1;
     case WSG_STREAM_WIDTH:
-        *value = (float)ax->width;
+        *value = (float)wsg_axis_width(ax);
         break;
     case WSG_STREAM_SPEED:
-        *value = (float)ax->speed;
+        *value = (float)wsg_axis_speed(ax);
         break;
     default:
-        *value = (float)ax->force;
+        *value = (float)wsg_axis_force(ax);
         break;
     }
     wsg_put_f32(out, *value);
@@ -217,7 +219,7 @@ size_t wsg_stream_value(const struct wsg_device *d, enum wsg_stream_id sid,
 
 void wsg_device_poll_streams(struct wsg_device *d, struct wsg_session *s)
 {
-    uint64_t now = d->axis.time_us;
+    uint64_t now = wsg_axis_time(&d->axis);
     unsigned i;
 
     for (i = 0; i < WSG_STREAM_COUNT && s->nstreams; i++) {
@@ -276,7 +278,8 @@ int wsg_device_busy(const struct wsg_device *d)
 static uint64_t wsg_device_stream_next(const struct wsg_device *d,
                                        const struct wsg_session *s)
 {
-    uint64_t now = d->axis.time_us, step = d->axis.cfg.step_us;
+    uint64_t now = wsg_axis_time(&d->axis);
+    uint64_t step = wsg_axis_cfg(&d->axis)->step_us;
     uint64_t best = UINT64_MAX;
     unsigned i;
 
@@ -321,5 +324,5 @@ uint64_t wsg_device_next(const struct wsg_device *d)
 
 void wsg_device_advance_idle(struct wsg_device *d, uint64_t nsteps)
 {
-    d->axis.time_us += nsteps * d->axis.cfg.step_us;
+    wsg_axis_advance_idle(&d->axis, nsteps);
 }

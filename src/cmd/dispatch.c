@@ -24,10 +24,10 @@ static uint16_t wsg_cmd_check(const struct wsg_device *d,
         if (wsg_axis_fast_stopped(ax))
             return WSG_E_ACCESS_DENIED;
         /* Appendix B: a fault disables all movement-related commands. */
-        if ((ax->faults | ax->thermal_faults) & WSG_FAULTS_BLOCKING)
+        if (wsg_axis_faults(ax) & WSG_FAULTS_BLOCKING)
             return WSG_E_ACCESS_DENIED;
     }
-    if ((c->flags & WSG_CMDF_HOMED) && !ax->referenced)
+    if ((c->flags & WSG_CMDF_HOMED) && !wsg_axis_referenced(ax))
         return WSG_E_NOT_INITIALIZED;
     if ((c->flags & WSG_CMDF_ASYNC) && wsg_axis_busy(ax))
         return WSG_E_ALREADY_RUNNING;
