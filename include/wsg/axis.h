@@ -2,13 +2,15 @@
  * The finger axis model: a fixed-step simulation of one WSG gripper's
  * fingers, their drive and a part between them.
  *
- * Command handlers only record requests (wsg_axis_request_*) and write
- * session settings; the state changes only in wsg_axis_step(), which
- * advances simulated time by exactly one fixed step, and in
- * wsg_axis_settle(), a step of zero length that applies the requests. The
- * model reads no clock and does no I/O: the caller drives it, a test with a
- * fake clock, the daemon from a timerfd. Results of motion commands leave
- * through a callback.
+ * Command handlers only record requests (wsg_axis_request_*) and change
+ * session settings through setters; the state changes only in
+ * wsg_axis_step(), which advances simulated time by exactly one fixed
+ * step, and in wsg_axis_settle(), a step of zero length that applies the
+ * requests. The model reads no clock and does no I/O: the caller drives
+ * it, a test with a fake clock, the daemon from a timerfd. Results of
+ * motion commands leave through a callback. The struct's layout is the
+ * model's own (src/axis/axis_impl.h): everyone else reads the state
+ * through getters, and a holder keeps it in a struct wsg_axis_storage.
  *
  * Units: mm, mm/s, mm/s^2, N, microseconds. Width is the distance between
  * the fingers (0 = closed).
@@ -76,82 +78,25 @@ struct wsg_grasp_stats {
 typedef void (*wsg_axis_done_fn)(void *ctx, uint32_t tag, uint8_t cmd_id,
                                  uint16_t status);
 
-enum wsg_motion_kind {
-    WSG_MOTION_NONE = 0,
-    WSG_MOTION_HOMING,
-    WSG_MOTION_MOVE,
-    WSG_MOTION_GRASP,
-    WSG_MOTION_RELEASE,
-    WSG_MOTION_SNAP /* silent: a clamp released or a part lost */
-};
+/* The model's state. Its layout is private to src/axis (axis_impl.h):
+ * everyone else reads it through the getters below and changes it through
+ * the requests and setters, so the model alone keeps its invariants. */
+struct wsg_axis;
 
-/* A trapezoidal profile from rest; positions follow analytically from the
- * time since its start, so durations are exact to one step. */
-struct wsg_profile {
-    double start, dist, dir; /* dir = +1 or -1 */
-    double vmax, acc;
-    double t_acc, t_total; /* seconds */
-    int decel;             /* 0: runs into an end stop at speed */
-    double t;              /* seconds since start */
-};
-
-struct wsg_motion {
-    enum wsg_motion_kind kind;
-    uint8_t cmd_id;
-    uint32_t tag;
-    double target;  /* where the profile ends */
-    double nominal; /* grasp: the part's nominal width; homing: +1/-1 */
-    double speed;
-    uint8_t move_flags; /* preposition flags */
-    struct wsg_profile prof;
-};
-
-struct wsg_axis {
-    struct wsg_axis_config cfg;
-    wsg_axis_done_fn on_done;
-    void *done_ctx;
-
-    /* Physical state, changed only by wsg_axis_step. */
-    uint64_t time_us;
-    double width, speed, force;
-    int referenced;
-    int fast_stop;
-    uint32_t event_flags; /* AXIS_STOPPED, TARGET_POS_REACHED, BLOCKED_* */
-    enum wsg_grasp_state grasp_state;
-    struct wsg_grasp_stats stats;
-    struct wsg_motion motion;
-    int clamping;        /* motor pushes against a block */
-    double clamp_force;  /* the force limit when the block was found */
-    double clamp_target; /* where the fingers snap if the block goes */
-    double clamp_speed;
-    int clamp_dir;
-
-    /* Session settings, written directly by command handlers. */
-    double acc;
-    double force_limit;
-    int overdrive;
-    int soft_limits;
-    double soft_minus, soft_plus;
-
-    /* The world: a part between the fingers. */
-    int part;
-    double part_width, part_stiffness;
-    int obstacle; /* something rigid stands in the way */
-    double obstacle_width;
-    double ref_offset;       /* reported width - physical width: nonzero after
-                                homing into an obstacle */
-    uint32_t faults;         /* injected fault flags (WSG_FAULTS) */
-    uint32_t thermal_faults; /* TEMP_WARNING/TEMP_FAULT from the model */
-    uint32_t faults_seen;    /* faults whose consequences were applied */
-    double temperature;      /* degC, reported by 46h */
-
-    /* Requests recorded by handlers, applied by the next step in order:
-     * fast stop, acknowledge, stop, new motion. */
-    int req_fast_stop, req_ack, req_stop;
-    struct wsg_motion req_motion;
-    /* A request answered E_CMD_PENDING and cancelled by a Stop or FAST STOP
-     * before it started: it still owes its final E_CMD_ABORTED. */
-    struct wsg_motion req_cancelled;
+/* Room for one struct wsg_axis inside an object that holds the model by
+ * value (the device) without seeing its layout, so that holding it costs
+ * no allocation. axis.c checks at compile time that the struct fits and
+ * that this is aligned for it; the words' types are those the struct
+ * holds. Only the model reads or writes it, through a struct wsg_axis *
+ * to it. */
+#define WSG_AXIS_STORAGE_WORDS 100
+struct wsg_axis_storage {
+    union {
+        double d;
+        uint64_t u;
+        void *p;
+        void (*f)(void);
+    } w[WSG_AXIS_STORAGE_WORDS];
 };
 
 /* Models selectable by name: "wsg50" (default), "wsg50-210", "wsg32",

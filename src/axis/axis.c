@@ -18,13 +18,40 @@
  * The ranges of the values a model takes (wsg_axis_config_range) live here
  * once: the session commands clamp into them, and the daemon's options
  * check their settings against them.
+ *
+ * The state's layout (axis_impl.h) is this folder's alone: the getters
+ * here are how everyone else reads it, and the compile-time checks below
+ * hold struct wsg_axis_storage, in which a holder keeps it, to its size
+ * and alignment.
  */
 #include <errno.h>
 #include <math.h>
+#include <stddef.h>
 #include <string.h>
 
-#include "wsg/axis.h"
+#include "axis_impl.h"
 #include "wsg/proto.h"
+
+/* A holder's struct wsg_axis_storage must take the struct: big enough and
+ * aligned at least as strictly (C99 has no _Static_assert or _Alignof: an
+ * array of negative size fails the build, and the offset of a member after
+ * a char is its type's alignment). Growing the struct past it means
+ * raising WSG_AXIS_STORAGE_WORDS. */
+struct wsg_axis_align_need {
+    char c;
+    struct wsg_axis a;
+};
+struct wsg_axis_align_have {
+    char c;
+    struct wsg_axis_storage s;
+};
+typedef char wsg_axis_storage_fits
+    [sizeof(struct wsg_axis) <= sizeof(struct wsg_axis_storage) ? 1 : -1];
+typedef char
+    wsg_axis_storage_aligned[offsetof(struct wsg_axis_align_need, a) <=
+                                     offsetof(struct wsg_axis_align_have, s)
+                                 ? 1
+                                 : -1];
 
 /* Widths closer than this are the same position (well below the 0.01 mm
  * change threshold of 43h). */

@@ -11,7 +11,7 @@ static uint16_t wsg_cmd_check(const struct wsg_device *d,
                               const struct wsg_cmd_desc *c,
                               const struct wsg_frame *f)
 {
-    const struct wsg_axis *ax = &d->axis;
+    const struct wsg_axis *ax = wsg_device_axis_const(d);
 
     if (s->announced)
         return WSG_E_ACCESS_DENIED; /* 3.1.2: waiting for the close */
@@ -53,5 +53,5 @@ void wsg_device_dispatch(struct wsg_device *d, struct wsg_session *s,
      * in the same read, sees the new state. Nothing else leaves requests
      * pending between commands: a close settles itself, and so does the
      * control channel. */
-    wsg_axis_settle(&d->axis);
+    wsg_axis_settle(wsg_device_axis(d));
 }

@@ -154,7 +154,7 @@ static void format_time(char *buf, size_t len, uint64_t us)
 
 static void cmd_part(struct wsg_ctl_client *c, int argc, char **argv)
 {
-    struct wsg_axis *ax = &c->ctl->cur->dev.axis;
+    struct wsg_axis *ax = wsg_device_axis(&c->ctl->cur->dev);
     struct wsg_axis_range r =
         wsg_axis_config_range(wsg_axis_cfg(ax), WSG_AXIS_WIDTH);
     double width, stiffness = 0.0;
@@ -185,7 +185,7 @@ static void cmd_part(struct wsg_ctl_client *c, int argc, char **argv)
 
 static void cmd_obstacle(struct wsg_ctl_client *c, int argc, char **argv)
 {
-    struct wsg_axis *ax = &c->ctl->cur->dev.axis;
+    struct wsg_axis *ax = wsg_device_axis(&c->ctl->cur->dev);
     struct wsg_axis_range r =
         wsg_axis_config_range(wsg_axis_cfg(ax), WSG_AXIS_WIDTH);
     double width;
@@ -237,7 +237,8 @@ static void cmd_fault(struct wsg_ctl_client *c, int argc, char **argv)
     }
     for (i = 0; i < sizeof faults / sizeof faults[0]; i++) {
         if (strcmp(argv[1], faults[i].name) == 0) {
-            wsg_axis_set_fault(&c->ctl->cur->dev.axis, faults[i].flag, on);
+            wsg_axis_set_fault(wsg_device_axis(&c->ctl->cur->dev),
+                               faults[i].flag, on);
             reply(c, "ok fault %s %s", faults[i].name, on ? "on" : "off");
             return;
         }
@@ -254,14 +255,16 @@ static void reply_time(struct wsg_ctl_client *c)
 
     /* Steps run by hand may have left the gripper idle part way. */
     wsg_sched_touch(c->ctl->sched, c->ctl->cur);
-    format_time(t, sizeof t, wsg_axis_time(&c->ctl->cur->dev.axis));
+    format_time(t, sizeof t,
+                wsg_axis_time(wsg_device_axis(&c->ctl->cur->dev)));
     reply(c, "ok %s", t);
 }
 
 static void cmd_time(struct wsg_ctl_client *c, int argc, char **argv)
 {
     struct wsg_sched *l = c->ctl->sched;
-    uint32_t step_us = wsg_axis_cfg(&c->ctl->cur->dev.axis)->step_us;
+    uint32_t step_us =
+        wsg_axis_cfg(wsg_device_axis(&c->ctl->cur->dev))->step_us;
     double v;
     int r;
 
@@ -356,7 +359,7 @@ static void cmd_state(struct wsg_ctl_client *c, int argc, char **argv)
     (void)argv;
     const struct wsg_gripper *g = c->ctl->cur;
     const struct wsg_device *d = &g->dev;
-    const struct wsg_axis *ax = &d->axis;
+    const struct wsg_axis *ax = wsg_device_axis_const(d);
     const struct wsg_sched *l = c->ctl->sched;
     uint32_t flags =
         wsg_axis_flags(ax) | (d->cmd_failure ? WSG_SF_CMD_FAILURE : 0u);
@@ -501,7 +504,7 @@ static void run_line(struct wsg_ctl_client *c, char *line)
     c->ctl->cur = &c->ctl->sched->grippers[c->gripper];
     wsg_sched_touch(c->ctl->sched, c->ctl->cur);
     run_command(c, argc, argv);
-    wsg_axis_settle(&c->ctl->cur->dev.axis);
+    wsg_axis_settle(wsg_device_axis(&c->ctl->cur->dev));
     wsg_sched_check(c->ctl->sched, c->ctl->cur);
 }
 
