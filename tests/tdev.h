@@ -37,6 +37,13 @@ struct tdev {
     struct tdev_sess sess[TDEV_SESSIONS];
 };
 
+/* The device's model, for the tests that look inside it (test_axis.c
+ * includes its layout, axis_impl.h); the others use its getters. */
+static inline struct wsg_axis *tdev_axis(struct tdev *t)
+{
+    return wsg_device_axis(&t->dev);
+}
+
 static inline void tdev_send(struct wsg_session *s, const uint8_t *pkt,
                              size_t len)
 {

@@ -7,6 +7,7 @@
  */
 #include <errno.h>
 
+#include "axis_impl.h"
 #include "tdev.h"
 
 /* Duration of a rest-to-rest move of d mm at vmax and acc. */
@@ -27,7 +28,7 @@ static double timed_move(struct tdev *t, float width, float speed)
     k = tdev_run_until(t, 0, WSG_CMD_PREPOSITION, 100000);
     REQUIRE(k > 0);
     CHECK_EQ(tdev_last(t)->status, WSG_E_SUCCESS);
-    return (double)k * t->dev.axis.cfg.step_us * 1e-6;
+    return (double)k * tdev_axis(t)->cfg.step_us * 1e-6;
 }
 
 static void test_durations(void)
@@ -37,7 +38,7 @@ static void test_durations(void)
 
     tdev_init(&t);
     CHECK_EQ(tdev_home(&t, 0), WSG_E_SUCCESS);
-    dt = t.dev.axis.cfg.step_us * 1e-6;
+    dt = tdev_axis(&t)->cfg.step_us * 1e-6;
     /* 110 -> 10 at 100 mm/s, 150 mm/s^2: reaches vmax */
     CHECK_NEAR(timed_move(&t, 10.0f, 100.0f), trapezoid_s(100.0, 100.0, 150.0),
                dt);
@@ -84,9 +85,9 @@ static void test_motion_values(void)
     tdev_steps(&t, 400);
     CHECK_NEAR(tdev_getf(&t, WSG_CMD_GET_SPEED), -50.0, 1e-3);
     for (i = 0; i < 10; i++) {
-        width_before = t.dev.axis.width;
+        width_before = tdev_axis(&t)->width;
         tdev_steps(&t, 1);
-        CHECK(t.dev.axis.width < width_before);
+        CHECK(tdev_axis(&t)->width < width_before);
     }
     CHECK_EQ(tdev_getf(&t, WSG_CMD_GET_FORCE), 0.0f); /* free motion */
     CHECK_EQ(tdev_final(&t, WSG_CMD_PREPOSITION, 10000), WSG_E_SUCCESS);
@@ -103,7 +104,7 @@ static void test_homing_time(void)
     /* from fully closed to the open end stop, at the slowest acceleration:
      * well within 4 s */
     tdev_init(&t);
-    t.dev.axis.width = 0.0;
+    tdev_axis(&t)->width = 0.0;
     CHECK_EQ(tdev_cmd1f(&t, WSG_CMD_SET_ACCELERATION, 100.0f), WSG_E_SUCCESS);
     CHECK_EQ(tdev_cmd(&t, WSG_CMD_HOMING, "\x01", 1), WSG_E_CMD_PENDING);
     tdev_steps(&t, 1);
@@ -113,7 +114,7 @@ static void test_homing_time(void)
     CHECK(k > 0 && k < 4000);
     CHECK_EQ(tdev_last(&t)->status, WSG_E_SUCCESS);
     CHECK_EQ(tdev_flags(&t), WSG_SF_REFERENCED);
-    CHECK_NEAR(t.dev.axis.width, 110.0, 1e-9);
+    CHECK_NEAR(tdev_axis(&t)->width, 110.0, 1e-9);
 
     /* every model homes within 4 s from the far end */
     {
@@ -123,12 +124,12 @@ static void test_homing_time(void)
         for (i = 0; i < 3; i++) {
             REQUIRE(wsg_axis_config_init(&cfg, models[i]) == 0);
             tdev_init_cfg(&t, &cfg);
-            t.dev.axis.width = 0.0;
+            tdev_axis(&t)->width = 0.0;
             CHECK_EQ(tdev_cmd(&t, WSG_CMD_HOMING, "\x00", 1),
                      WSG_E_CMD_PENDING);
             k = tdev_run_until(&t, 0, WSG_CMD_HOMING, 4000);
             CHECK(k > 0);
-            CHECK_NEAR(t.dev.axis.width, cfg.stroke, 1e-9);
+            CHECK_NEAR(tdev_axis(&t)->width, cfg.stroke, 1e-9);
         }
     }
     CHECK_EQ(wsg_axis_config_init(&(struct wsg_axis_config){0}, "wsg99"),
@@ -143,18 +144,18 @@ static void test_grasp_hold(void)
 
     tdev_init(&t);
     CHECK_EQ(tdev_home(&t, 0), WSG_E_SUCCESS);
-    wsg_axis_set_part(&t.dev.axis, 40.0, 10.0); /* soft: 10 N/mm */
+    wsg_axis_set_part(tdev_axis(&t), 40.0, 10.0); /* soft: 10 N/mm */
     CHECK_EQ(tdev_cmd2f(&t, WSG_CMD_GRASP, 40.0f, 100.0f), WSG_E_CMD_PENDING);
     tdev_steps(&t, 1);
     CHECK_EQ(tdev_grasp_state(&t), WSG_GS_GRASPING);
     /* run to first contact, then watch the force build up */
-    for (i = 0; i < 3000 && t.dev.axis.width > 40.0; i++)
+    for (i = 0; i < 3000 && tdev_axis(&t)->width > 40.0; i++)
         tdev_steps(&t, 1);
-    for (i = 0; i < 3000 && t.dev.axis.motion.kind; i++) {
+    for (i = 0; i < 3000 && tdev_axis(&t)->motion.kind; i++) {
         tdev_steps(&t, 1);
-        if (t.dev.axis.force < prev)
+        if (tdev_axis(&t)->force < prev)
             rising = 0;
-        prev = t.dev.axis.force;
+        prev = tdev_axis(&t)->force;
     }
     CHECK(rising);
     CHECK(i > 5); /* took several steps, did not jump */
@@ -169,19 +170,19 @@ static void test_grasp_hold(void)
     /* holding is not moving: steps change nothing */
     CHECK(wsg_device_idle(&t.dev));
     tdev_steps(&t, 100);
-    CHECK_NEAR(t.dev.axis.width, 36.0, 1e-9);
+    CHECK_NEAR(tdev_axis(&t)->width, 36.0, 1e-9);
 
     /* the part is removed: lost, the fingers close through the clamping
      * travel, statistics count it */
-    wsg_axis_set_part(&t.dev.axis, -1.0, 0);
+    wsg_axis_set_part(tdev_axis(&t), -1.0, 0);
     CHECK(!wsg_device_idle(&t.dev));
     tdev_steps(&t, 1);
     CHECK_EQ(tdev_grasp_state(&t), WSG_GS_PART_LOST);
     CHECK(tdev_flags(&t) & WSG_SF_MOVING);
     CHECK(!(tdev_flags(&t) & WSG_SF_BLOCKED_MINUS));
     tdev_steps(&t, 2000);
-    CHECK_NEAR(t.dev.axis.width, 30.0, 1e-9); /* 40 - 10 mm travel */
-    CHECK_EQ(t.dev.axis.force, 0.0);
+    CHECK_NEAR(tdev_axis(&t)->width, 30.0, 1e-9); /* 40 - 10 mm travel */
+    CHECK_EQ(tdev_axis(&t)->force, 0.0);
     CHECK_EQ(tdev_grasp_state(&t), WSG_GS_PART_LOST);
     CHECK_EQ(tdev_cmd(&t, WSG_CMD_GET_GRASP_STATS, NULL, 0), WSG_E_SUCCESS);
     CHECK_EQ(wsg_get_u32(tdev_last(&t)->params), 1);
@@ -206,18 +207,18 @@ static void test_grasp_no_part(void)
     CHECK_EQ(tdev_cmd2f(&t, WSG_CMD_GRASP, 40.0f, 100.0f), WSG_E_CMD_PENDING);
     CHECK_EQ(tdev_final(&t, WSG_CMD_GRASP, 4000), WSG_E_CMD_FAILED);
     CHECK_EQ(tdev_grasp_state(&t), WSG_GS_NO_PART);
-    CHECK_NEAR(t.dev.axis.width, 30.0, 1e-9);
+    CHECK_NEAR(tdev_axis(&t)->width, 30.0, 1e-9);
     CHECK(!(tdev_flags(&t) & WSG_SF_TARGET_POS_REACHED));
 
     /* a part much wider than expected blocks outside the window */
     CHECK_EQ(tdev_cmd2f(&t, WSG_CMD_RELEASE, 100.0f, 400.0f),
              WSG_E_CMD_PENDING);
     CHECK_EQ(tdev_final(&t, WSG_CMD_RELEASE, 4000), WSG_E_SUCCESS);
-    wsg_axis_set_part(&t.dev.axis, 80.0, 0);
+    wsg_axis_set_part(tdev_axis(&t), 80.0, 0);
     CHECK_EQ(tdev_cmd2f(&t, WSG_CMD_GRASP, 40.0f, 100.0f), WSG_E_CMD_PENDING);
     CHECK_EQ(tdev_final(&t, WSG_CMD_GRASP, 4000), WSG_E_CMD_FAILED);
     CHECK_EQ(tdev_grasp_state(&t), WSG_GS_NO_PART);
-    CHECK(t.dev.axis.width > 79.0);
+    CHECK(tdev_axis(&t)->width > 79.0);
 
     /* within the tolerance above the nominal width: held */
     CHECK_EQ(tdev_cmd2f(&t, WSG_CMD_GRASP, 75.0f, 100.0f), WSG_E_CMD_PENDING);
@@ -230,7 +231,7 @@ static void test_grasp_no_part(void)
     CHECK_EQ(tdev_cmd(&t, WSG_CMD_STOP, NULL, 0), WSG_E_SUCCESS);
     tdev_steps(&t, 1);
     CHECK_EQ(tdev_grasp_state(&t), WSG_GS_IDLE);
-    CHECK_EQ(t.dev.axis.force, 0.0);
+    CHECK_EQ(tdev_axis(&t)->force, 0.0);
     CHECK(tdev_flags(&t) & WSG_SF_AXIS_STOPPED);
 }
 
@@ -240,34 +241,34 @@ static void test_block(void)
 
     tdev_init(&t);
     CHECK_EQ(tdev_home(&t, 0), WSG_E_SUCCESS);
-    wsg_axis_set_part(&t.dev.axis, 50.0, 0); /* default 50 N/mm */
+    wsg_axis_set_part(tdev_axis(&t), 50.0, 0); /* default 50 N/mm */
     /* clamp on block: E_AXIS_BLOCKED, keeps the force limit */
     CHECK_EQ(tdev_move(&t, 0, 20.0f, 100.0f), WSG_E_CMD_PENDING);
     CHECK_EQ(tdev_final(&t, WSG_CMD_PREPOSITION, 4000), WSG_E_AXIS_BLOCKED);
-    CHECK_NEAR(t.dev.axis.width, 50.0 - 40.0 / 50.0, 1e-9);
+    CHECK_NEAR(tdev_axis(&t)->width, 50.0 - 40.0 / 50.0, 1e-9);
     CHECK_NEAR(tdev_getf(&t, WSG_CMD_GET_FORCE), 40.0, 1e-3);
     CHECK(tdev_flags(&t) & WSG_SF_BLOCKED_MINUS);
     CHECK(!(tdev_flags(&t) & WSG_SF_MOVING));
     /* the block goes: the fingers snap to the target, no further reply */
-    wsg_axis_set_part(&t.dev.axis, -1, 0);
+    wsg_axis_set_part(tdev_axis(&t), -1, 0);
     tdev_clear(&t);
     tdev_steps(&t, 2000);
-    CHECK_NEAR(t.dev.axis.width, 20.0, 1e-9);
+    CHECK_NEAR(tdev_axis(&t)->width, 20.0, 1e-9);
     CHECK_EQ(t.sess[0].n, 0);
     CHECK(!(tdev_flags(&t) & WSG_SF_BLOCKED_MINUS));
 
     /* stop on block: the motor stops, no force */
     CHECK_EQ(tdev_move(&t, 0, 90.0f, 400.0f), WSG_E_CMD_PENDING);
     CHECK_EQ(tdev_final(&t, WSG_CMD_PREPOSITION, 4000), WSG_E_SUCCESS);
-    wsg_axis_set_part(&t.dev.axis, 50.0, 0);
+    wsg_axis_set_part(tdev_axis(&t), 50.0, 0);
     CHECK_EQ(tdev_move(&t, WSG_MOVE_STOP_ON_BLOCK, 20.0f, 100.0f),
              WSG_E_CMD_PENDING);
     CHECK_EQ(tdev_final(&t, WSG_CMD_PREPOSITION, 4000), WSG_E_AXIS_BLOCKED);
     CHECK_EQ(tdev_getf(&t, WSG_CMD_GET_FORCE), 0.0f);
     CHECK(tdev_flags(&t) & WSG_SF_BLOCKED_MINUS);
-    wsg_axis_set_part(&t.dev.axis, -1, 0);
+    wsg_axis_set_part(tdev_axis(&t), -1, 0);
     tdev_steps(&t, 2000);
-    CHECK_NEAR(t.dev.axis.width, 50.0 - 40.0 / 50.0, 1e-9); /* stays */
+    CHECK_NEAR(tdev_axis(&t)->width, 50.0 - 40.0 / 50.0, 1e-9); /* stays */
 }
 
 static void test_soft_limits(void)
@@ -289,7 +290,7 @@ static void test_soft_limits(void)
      * part: FAST STOP at the limit (3.3.5) */
     CHECK_EQ(tdev_cmd2f(&t, WSG_CMD_GRASP, 25.0f, 100.0f), WSG_E_CMD_PENDING);
     CHECK_EQ(tdev_final(&t, WSG_CMD_GRASP, 4000), WSG_E_RANGE_ERROR);
-    CHECK_NEAR(t.dev.axis.width, 20.0, 1e-9);
+    CHECK_NEAR(tdev_axis(&t)->width, 20.0, 1e-9);
     CHECK_EQ(tdev_flags(&t), WSG_SF_REFERENCED | WSG_SF_SOFT_LIMIT_MINUS |
                                  WSG_SF_FAST_STOP | WSG_SF_CMD_FAILURE);
     CHECK_EQ(tdev_move(&t, 0, 60.0f, 100.0f), WSG_E_ACCESS_DENIED);
@@ -299,7 +300,7 @@ static void test_soft_limits(void)
     CHECK_EQ(tdev_final(&t, WSG_CMD_PREPOSITION, 4000), WSG_E_SUCCESS);
     /* homing ignores soft limits */
     CHECK_EQ(tdev_home(&t, 2), WSG_E_SUCCESS);
-    CHECK_NEAR(t.dev.axis.width, 0.0, 1e-9);
+    CHECK_NEAR(tdev_axis(&t)->width, 0.0, 1e-9);
     CHECK(!(tdev_flags(&t) & WSG_SF_FAST_STOP));
 }
 
@@ -312,7 +313,7 @@ static void test_overdrive(void)
     CHECK_EQ(tdev_home(&t, 0), WSG_E_SUCCESS);
     CHECK_EQ(tdev_cmd(&t, WSG_CMD_OVERDRIVE, &on, 1), WSG_E_SUCCESS);
     CHECK_EQ(tdev_cmd1f(&t, WSG_CMD_SET_FORCE_LIMIT, 500.0f), WSG_E_SUCCESS);
-    wsg_axis_set_part(&t.dev.axis, 60.0, 0);
+    wsg_axis_set_part(tdev_axis(&t), 60.0, 0);
     CHECK_EQ(tdev_cmd2f(&t, WSG_CMD_GRASP, 60.0f, 100.0f), WSG_E_CMD_PENDING);
     CHECK_EQ(tdev_final(&t, WSG_CMD_GRASP, 4000), WSG_E_SUCCESS);
     CHECK_NEAR(tdev_getf(&t, WSG_CMD_GET_FORCE), 120.0, 1e-3);
@@ -328,13 +329,13 @@ static void test_faults(void)
     tdev_init(&t);
     CHECK_EQ(tdev_home(&t, 0), WSG_E_SUCCESS);
     /* a temperature fault disables movement; a warning does not */
-    wsg_axis_set_fault(&t.dev.axis, WSG_SF_TEMP_WARNING, 1);
+    wsg_axis_set_fault(tdev_axis(&t), WSG_SF_TEMP_WARNING, 1);
     CHECK(tdev_flags(&t) & WSG_SF_TEMP_WARNING);
     CHECK_EQ(tdev_move(&t, 0, 50.0f, 100.0f), WSG_E_CMD_PENDING);
     CHECK_EQ(tdev_final(&t, WSG_CMD_PREPOSITION, 4000), WSG_E_SUCCESS);
-    wsg_axis_set_fault(&t.dev.axis, WSG_SF_TEMP_FAULT, 1);
+    wsg_axis_set_fault(tdev_axis(&t), WSG_SF_TEMP_FAULT, 1);
     CHECK_EQ(tdev_move(&t, 0, 60.0f, 100.0f), WSG_E_ACCESS_DENIED);
-    wsg_axis_set_fault(&t.dev.axis, WSG_SF_TEMP_FAULT | WSG_SF_TEMP_WARNING,
+    wsg_axis_set_fault(tdev_axis(&t), WSG_SF_TEMP_FAULT | WSG_SF_TEMP_WARNING,
                        0);
     CHECK_EQ(tdev_flags(&t) & WSG_FAULTS, 0);
     CHECK_EQ(tdev_move(&t, 0, 60.0f, 100.0f), WSG_E_CMD_PENDING);
@@ -348,30 +349,30 @@ static void test_obstacle(void)
     CHECK_EQ(tdev_home(&t, 0), WSG_E_SUCCESS);
     /* Rigid, either way: a closing move blocks at it, clamping with the
      * force limit; an opening one from below blocks at it too. */
-    wsg_axis_set_obstacle(&t.dev.axis, 60.0);
+    wsg_axis_set_obstacle(tdev_axis(&t), 60.0);
     CHECK_EQ(tdev_move(&t, 0, 20.0f, 100.0f), WSG_E_CMD_PENDING);
     CHECK_EQ(tdev_final(&t, WSG_CMD_PREPOSITION, 4000), WSG_E_AXIS_BLOCKED);
-    CHECK_NEAR(t.dev.axis.width, 60.0, 1e-9);
+    CHECK_NEAR(tdev_axis(&t)->width, 60.0, 1e-9);
     CHECK_NEAR(tdev_getf(&t, WSG_CMD_GET_FORCE), 40.0, 1e-3);
     CHECK(tdev_flags(&t) & WSG_SF_BLOCKED_MINUS);
     CHECK(wsg_device_idle(&t.dev));
     /* Taken away: the clamp snaps on to its target. */
-    wsg_axis_set_obstacle(&t.dev.axis, -1.0);
+    wsg_axis_set_obstacle(tdev_axis(&t), -1.0);
     CHECK(!wsg_device_idle(&t.dev));
     tdev_steps(&t, 3000);
-    CHECK_NEAR(t.dev.axis.width, 20.0, 1e-9);
-    wsg_axis_set_obstacle(&t.dev.axis, 50.0);
+    CHECK_NEAR(tdev_axis(&t)->width, 20.0, 1e-9);
+    wsg_axis_set_obstacle(tdev_axis(&t), 50.0);
     CHECK_EQ(tdev_move(&t, WSG_MOVE_STOP_ON_BLOCK, 90.0f, 100.0f),
              WSG_E_CMD_PENDING);
     CHECK_EQ(tdev_final(&t, WSG_CMD_PREPOSITION, 4000), WSG_E_AXIS_BLOCKED);
-    CHECK_NEAR(t.dev.axis.width, 50.0, 1e-9);
+    CHECK_NEAR(tdev_axis(&t)->width, 50.0, 1e-9);
     CHECK(tdev_flags(&t) & WSG_SF_BLOCKED_PLUS);
     CHECK_EQ(tdev_getf(&t, WSG_CMD_GET_FORCE), 0.0f);
     /* The nearest block counts: a part behind the obstacle is not felt. */
-    wsg_axis_set_part(&t.dev.axis, 30.0, 0);
+    wsg_axis_set_part(tdev_axis(&t), 30.0, 0);
     CHECK_EQ(tdev_cmd2f(&t, WSG_CMD_GRASP, 30.0f, 100.0f), WSG_E_CMD_PENDING);
     CHECK_EQ(tdev_final(&t, WSG_CMD_GRASP, 4000), WSG_E_CMD_FAILED);
-    CHECK_NEAR(t.dev.axis.width, 50.0, 1e-9); /* outside the window */
+    CHECK_NEAR(tdev_axis(&t)->width, 50.0, 1e-9); /* outside the window */
 }
 
 /* 3.2.1: homing into an obstacle takes the blocking position as origin,
@@ -381,18 +382,18 @@ static void test_homing_into_obstacle(void)
     struct tdev t;
 
     tdev_init(&t);
-    wsg_axis_set_obstacle(&t.dev.axis, 80.0);
+    wsg_axis_set_obstacle(tdev_axis(&t), 80.0);
     CHECK_EQ(tdev_home(&t, 1), WSG_E_SUCCESS);
     /* It believes it is open at 110 mm, 30 mm off. */
     CHECK_NEAR(tdev_getf(&t, WSG_CMD_GET_WIDTH), 110.0, 1e-3);
-    wsg_axis_set_obstacle(&t.dev.axis, -1.0);
+    wsg_axis_set_obstacle(tdev_axis(&t), -1.0);
     /* A part of 40 mm is met where the gripper believes 70 mm is. */
-    wsg_axis_set_part(&t.dev.axis, 40.0, 1e6);
+    wsg_axis_set_part(tdev_axis(&t), 40.0, 1e6);
     CHECK_EQ(tdev_move(&t, WSG_MOVE_STOP_ON_BLOCK, 50.0f, 100.0f),
              WSG_E_CMD_PENDING);
     CHECK_EQ(tdev_final(&t, WSG_CMD_PREPOSITION, 4000), WSG_E_AXIS_BLOCKED);
     CHECK_NEAR(tdev_getf(&t, WSG_CMD_GET_WIDTH), 70.0, 1e-3);
-    wsg_axis_set_part(&t.dev.axis, -1.0, 0);
+    wsg_axis_set_part(tdev_axis(&t), -1.0, 0);
     /* Closing "to 10 mm" meets the real end stop where it believes 30 mm
      * is: blocked there. */
     CHECK_EQ(tdev_move(&t, 0, 10.0f, 100.0f), WSG_E_CMD_PENDING);
@@ -401,7 +402,7 @@ static void test_homing_into_obstacle(void)
     /* Homing again, nothing in the way: right again. */
     CHECK_EQ(tdev_home(&t, 2), WSG_E_SUCCESS);
     CHECK_NEAR(tdev_getf(&t, WSG_CMD_GET_WIDTH), 0.0, 1e-3);
-    CHECK_NEAR(t.dev.axis.ref_offset, 0.0, 1e-9);
+    CHECK_NEAR(tdev_axis(&t)->ref_offset, 0.0, 1e-9);
     CHECK_EQ(tdev_move(&t, 0, 40.0f, 100.0f), WSG_E_CMD_PENDING);
     CHECK_EQ(tdev_final(&t, WSG_CMD_PREPOSITION, 4000), WSG_E_SUCCESS);
 }
@@ -416,11 +417,11 @@ static void test_fault_consequences(void)
     CHECK_EQ(tdev_home(&t, 0), WSG_E_SUCCESS);
     CHECK_EQ(tdev_move(&t, 0, 10.0f, 20.0f), WSG_E_CMD_PENDING);
     tdev_steps(&t, 100);
-    wsg_axis_set_fault(&t.dev.axis, WSG_SF_POWER_FAULT, 1);
+    wsg_axis_set_fault(tdev_axis(&t), WSG_SF_POWER_FAULT, 1);
     CHECK_EQ(tdev_final(&t, WSG_CMD_PREPOSITION, 10), WSG_E_CMD_ABORTED);
     CHECK_EQ(tdev_flags(&t) & (WSG_SF_POWER_FAULT | WSG_SF_FAST_STOP),
              WSG_SF_POWER_FAULT | WSG_SF_FAST_STOP);
-    wsg_axis_set_fault(&t.dev.axis, WSG_SF_POWER_FAULT, 0);
+    wsg_axis_set_fault(tdev_axis(&t), WSG_SF_POWER_FAULT, 0);
     tdev_steps(&t, 1);
     CHECK(tdev_flags(&t) & WSG_SF_FAST_STOP);
     CHECK_EQ(tdev_move(&t, 0, 50.0f, 100.0f), WSG_E_ACCESS_DENIED);
@@ -430,31 +431,31 @@ static void test_fault_consequences(void)
     CHECK_EQ(tdev_final(&t, WSG_CMD_PREPOSITION, 4000), WSG_E_SUCCESS);
 
     /* A current fault as well. */
-    wsg_axis_set_fault(&t.dev.axis, WSG_SF_CURR_FAULT, 1);
+    wsg_axis_set_fault(tdev_axis(&t), WSG_SF_CURR_FAULT, 1);
     tdev_steps(&t, 1);
     CHECK(tdev_flags(&t) & WSG_SF_FAST_STOP);
-    wsg_axis_set_fault(&t.dev.axis, WSG_SF_CURR_FAULT, 0);
+    wsg_axis_set_fault(tdev_axis(&t), WSG_SF_CURR_FAULT, 0);
     CHECK_EQ(tdev_cmd(&t, WSG_CMD_ACK_FAST_STOP, "ack", 3), WSG_E_SUCCESS);
     tdev_steps(&t, 1);
 
     /* A temperature fault: the motion and the grip end, movement refused
      * until it clears; no FAST STOP, nothing to acknowledge. */
-    wsg_axis_set_part(&t.dev.axis, 30.0, 0);
+    wsg_axis_set_part(tdev_axis(&t), 30.0, 0);
     CHECK_EQ(tdev_cmd2f(&t, WSG_CMD_GRASP, 30.0f, 100.0f), WSG_E_CMD_PENDING);
     CHECK_EQ(tdev_final(&t, WSG_CMD_GRASP, 4000), WSG_E_SUCCESS);
-    wsg_axis_set_fault(&t.dev.axis, WSG_SF_TEMP_FAULT, 1);
+    wsg_axis_set_fault(tdev_axis(&t), WSG_SF_TEMP_FAULT, 1);
     tdev_steps(&t, 1);
     CHECK_EQ(tdev_getf(&t, WSG_CMD_GET_FORCE), 0.0f);
     CHECK_EQ(tdev_grasp_state(&t), WSG_GS_ERROR);
     CHECK(!(tdev_flags(&t) & WSG_SF_FAST_STOP));
     CHECK_EQ(tdev_cmd2f(&t, WSG_CMD_RELEASE, 60.0f, 100.0f),
              WSG_E_ACCESS_DENIED);
-    wsg_axis_set_fault(&t.dev.axis, WSG_SF_TEMP_FAULT, 0);
+    wsg_axis_set_fault(tdev_axis(&t), WSG_SF_TEMP_FAULT, 0);
     CHECK_EQ(tdev_cmd2f(&t, WSG_CMD_RELEASE, 60.0f, 100.0f),
              WSG_E_CMD_PENDING);
     CHECK_EQ(tdev_final(&t, WSG_CMD_RELEASE, 4000), WSG_E_SUCCESS);
     /* A finger fault refuses movement, stops nothing. */
-    wsg_axis_set_fault(&t.dev.axis, WSG_SF_FINGER_FAULT, 1);
+    wsg_axis_set_fault(tdev_axis(&t), WSG_SF_FINGER_FAULT, 1);
     tdev_steps(&t, 1);
     CHECK_EQ(tdev_flags(&t) & (WSG_SF_FINGER_FAULT | WSG_SF_FAST_STOP),
              WSG_SF_FINGER_FAULT);
@@ -476,15 +477,16 @@ static void test_overheating(void)
     CHECK_EQ(tdev_home(&t, 0), WSG_E_SUCCESS);
     CHECK_EQ(tdev_cmd(&t, WSG_CMD_OVERDRIVE, &on, 1), WSG_E_SUCCESS);
     CHECK_EQ(tdev_cmd1f(&t, WSG_CMD_SET_FORCE_LIMIT, 120.0f), WSG_E_SUCCESS);
-    wsg_axis_set_part(&t.dev.axis, 50.0, 0);
+    wsg_axis_set_part(tdev_axis(&t), 50.0, 0);
     CHECK_EQ(tdev_cmd2f(&t, WSG_CMD_GRASP, 50.0f, 100.0f), WSG_E_CMD_PENDING);
     CHECK_EQ(tdev_final(&t, WSG_CMD_GRASP, 4000), WSG_E_SUCCESS);
     CHECK(!wsg_device_idle(&t.dev)); /* warming up */
     for (k = 1; k <= 80000 && fault_ms < 0; k++) {
         tdev_steps(&t, 1);
-        if (warn_ms < 0 && (wsg_axis_flags(&t.dev.axis) & WSG_SF_TEMP_WARNING))
+        if (warn_ms < 0 &&
+            (wsg_axis_flags(tdev_axis(&t)) & WSG_SF_TEMP_WARNING))
             warn_ms = k;
-        if (wsg_axis_flags(&t.dev.axis) & WSG_SF_TEMP_FAULT)
+        if (wsg_axis_flags(tdev_axis(&t)) & WSG_SF_TEMP_FAULT)
             fault_ms = k;
     }
     printf("overdrive: warning after %ld ms, fault after %ld ms\n", warn_ms,
@@ -501,7 +503,7 @@ static void test_overheating(void)
              WSG_E_ACCESS_DENIED);
     /* Below 70 degC the fault clears (hysteresis), below 60 the warning. */
     tdev_steps(&t, 60000);
-    CHECK(t.dev.axis.temperature < 60.0);
+    CHECK(tdev_axis(&t)->temperature < 60.0);
     CHECK_EQ(tdev_flags(&t) & (WSG_SF_TEMP_WARNING | WSG_SF_TEMP_FAULT), 0);
     CHECK_EQ(tdev_cmd2f(&t, WSG_CMD_RELEASE, 60.0f, 100.0f),
              WSG_E_CMD_PENDING);
@@ -509,12 +511,12 @@ static void test_overheating(void)
     tdev_init(&t);
     CHECK_EQ(tdev_home(&t, 0), WSG_E_SUCCESS);
     CHECK_EQ(tdev_cmd1f(&t, WSG_CMD_SET_FORCE_LIMIT, 80.0f), WSG_E_SUCCESS);
-    wsg_axis_set_part(&t.dev.axis, 50.0, 0);
+    wsg_axis_set_part(tdev_axis(&t), 50.0, 0);
     CHECK_EQ(tdev_cmd2f(&t, WSG_CMD_GRASP, 50.0f, 100.0f), WSG_E_CMD_PENDING);
     CHECK_EQ(tdev_final(&t, WSG_CMD_GRASP, 4000), WSG_E_SUCCESS);
     CHECK(wsg_device_idle(&t.dev));
     tdev_steps(&t, 10000);
-    CHECK_NEAR(t.dev.axis.temperature, 25.0, 1e-9);
+    CHECK_NEAR(tdev_axis(&t)->temperature, 25.0, 1e-9);
 }
 
 /* A power cycle during a motion: it ends E_CMD_ABORTED, the gripper is
@@ -550,11 +552,11 @@ static void test_part_wider_than_opening(void)
     CHECK_EQ(tdev_home(&t, 0), WSG_E_SUCCESS);
     CHECK_EQ(tdev_move(&t, 0, 50.0f, 100.0f), WSG_E_CMD_PENDING);
     CHECK_EQ(tdev_final(&t, WSG_CMD_PREPOSITION, 4000), WSG_E_SUCCESS);
-    wsg_axis_set_part(&t.dev.axis, 70.0, 0);
+    wsg_axis_set_part(tdev_axis(&t), 70.0, 0);
     CHECK_EQ(tdev_move(&t, 0, 90.0f, 20.0f), WSG_E_CMD_PENDING);
     for (i = 0; i < 3000; i++) {
         tdev_steps(&t, 1);
-        CHECK(t.dev.axis.force <= t.dev.axis.force_limit);
+        CHECK(tdev_axis(&t)->force <= tdev_axis(&t)->force_limit);
     }
 }
 
@@ -570,13 +572,13 @@ static void test_overdrive_off_while_holding(void)
     CHECK_EQ(tdev_home(&t, 0), WSG_E_SUCCESS);
     CHECK_EQ(tdev_cmd(&t, WSG_CMD_OVERDRIVE, &on, 1), WSG_E_SUCCESS);
     CHECK_EQ(tdev_cmd1f(&t, WSG_CMD_SET_FORCE_LIMIT, 110.0f), WSG_E_SUCCESS);
-    wsg_axis_set_part(&t.dev.axis, 60.0, 0); /* 50 N/mm */
+    wsg_axis_set_part(tdev_axis(&t), 60.0, 0); /* 50 N/mm */
     CHECK_EQ(tdev_cmd2f(&t, WSG_CMD_GRASP, 60.0f, 100.0f), WSG_E_CMD_PENDING);
     CHECK_EQ(tdev_final(&t, WSG_CMD_GRASP, 4000), WSG_E_SUCCESS);
     CHECK_NEAR(tdev_getf(&t, WSG_CMD_GET_FORCE), 110.0, 1e-3);
     CHECK_NEAR(tdev_getf(&t, WSG_CMD_GET_WIDTH), 60.0 - 110.0 / 50.0, 1e-3);
     tdev_steps(&t, 1000); /* warming up */
-    CHECK(t.dev.axis.temperature > t.dev.axis.cfg.ambient + 0.5);
+    CHECK(tdev_axis(&t)->temperature > tdev_axis(&t)->cfg.ambient + 0.5);
 
     /* no step in between: every reading shows it at once */
     CHECK_EQ(tdev_cmd(&t, WSG_CMD_OVERDRIVE, &off, 1), WSG_E_SUCCESS);
@@ -589,9 +591,9 @@ static void test_overdrive_off_while_holding(void)
     /* still held at nominal force; holding at nominal heats nothing, so
      * the drive cools down instead of warming further */
     {
-        double before = t.dev.axis.temperature;
+        double before = tdev_axis(&t)->temperature;
         tdev_steps(&t, 5000);
-        CHECK(t.dev.axis.temperature < before);
+        CHECK(tdev_axis(&t)->temperature < before);
         CHECK_NEAR(tdev_getf(&t, WSG_CMD_GET_FORCE), 80.0, 1e-3);
         CHECK_EQ(tdev_grasp_state(&t), WSG_GS_HOLDING);
     }
@@ -614,7 +616,7 @@ static void test_soft_limits_inside(void)
     /* closing from 110 towards 20 at 50 mm/s, now around 80 */
     CHECK_EQ(tdev_move(&t, 0, 20.0f, 50.0f), WSG_E_CMD_PENDING);
     tdev_steps(&t, 800);
-    w = t.dev.axis.width;
+    w = tdev_axis(&t)->width;
     REQUIRE(w > 70.0 && w < 95.0);
     tdev_clear(&t);
     CHECK_EQ(tdev_cmd2f(&t, WSG_CMD_SET_SOFT_LIMITS, 100.0f, 110.0f),
@@ -626,15 +628,15 @@ static void test_soft_limits_inside(void)
     CHECK_EQ(tdev_flags(&t) & ~WSG_SF_CMD_FAILURE,
              WSG_SF_REFERENCED | WSG_SF_SOFT_LIMIT_MINUS | WSG_SF_FAST_STOP);
     CHECK_EQ(tdev_grasp_state(&t), WSG_GS_ERROR);
-    CHECK_NEAR(t.dev.axis.width, w, 1e-9); /* where it was */
+    CHECK_NEAR(tdev_axis(&t)->width, w, 1e-9); /* where it was */
     tdev_clear(&t);
     tdev_steps(&t, 100);
-    CHECK_NEAR(t.dev.axis.width, w, 1e-9);
+    CHECK_NEAR(tdev_axis(&t)->width, w, 1e-9);
     /* out of the restricted area: allowed after the acknowledge */
     CHECK_EQ(tdev_cmd(&t, WSG_CMD_ACK_FAST_STOP, "ack", 3), WSG_E_SUCCESS);
     CHECK_EQ(tdev_move(&t, 0, 105.0f, 50.0f), WSG_E_CMD_PENDING);
     CHECK_EQ(tdev_final(&t, WSG_CMD_PREPOSITION, 4000), WSG_E_SUCCESS);
-    CHECK_NEAR(t.dev.axis.width, 105.0, 1e-9);
+    CHECK_NEAR(tdev_axis(&t)->width, 105.0, 1e-9);
 
     /* the same on the plus side, with a clamp that snaps on deeper: a
      * clamp on an obstacle at 60, target 90, limits set to 20..50, the
@@ -642,16 +644,16 @@ static void test_soft_limits_inside(void)
     CHECK_EQ(tdev_cmd(&t, WSG_CMD_CLEAR_SOFT_LIMITS, NULL, 0), WSG_E_SUCCESS);
     CHECK_EQ(tdev_move(&t, 0, 40.0f, 100.0f), WSG_E_CMD_PENDING);
     CHECK_EQ(tdev_final(&t, WSG_CMD_PREPOSITION, 4000), WSG_E_SUCCESS);
-    wsg_axis_set_obstacle(&t.dev.axis, 60.0);
+    wsg_axis_set_obstacle(tdev_axis(&t), 60.0);
     CHECK_EQ(tdev_move(&t, 0, 90.0f, 100.0f), WSG_E_CMD_PENDING);
     CHECK_EQ(tdev_final(&t, WSG_CMD_PREPOSITION, 4000), WSG_E_AXIS_BLOCKED);
-    CHECK_NEAR(t.dev.axis.width, 60.0, 1e-9);
+    CHECK_NEAR(tdev_axis(&t)->width, 60.0, 1e-9);
     CHECK_EQ(tdev_cmd2f(&t, WSG_CMD_SET_SOFT_LIMITS, 20.0f, 50.0f),
              WSG_E_SUCCESS);
     CHECK(tdev_flags(&t) & WSG_SF_SOFT_LIMIT_PLUS);
-    wsg_axis_set_obstacle(&t.dev.axis, -1.0);
+    wsg_axis_set_obstacle(tdev_axis(&t), -1.0);
     tdev_steps(&t, 1000);
-    CHECK_NEAR(t.dev.axis.width, 60.0, 1e-9);
+    CHECK_NEAR(tdev_axis(&t)->width, 60.0, 1e-9);
     CHECK(tdev_flags(&t) & WSG_SF_FAST_STOP);
     CHECK(!(tdev_flags(&t) & WSG_SF_MOVING));
 }
@@ -668,7 +670,7 @@ static void test_grasp_end_stop(void)
     CHECK_EQ(tdev_cmd2f(&t, WSG_CMD_GRASP, 0.0f, 100.0f), WSG_E_CMD_PENDING);
     CHECK_EQ(tdev_final(&t, WSG_CMD_GRASP, 4000), WSG_E_SUCCESS);
     CHECK_EQ(tdev_grasp_state(&t), WSG_GS_HOLDING);
-    CHECK_NEAR(t.dev.axis.width, 0.0, 1e-9);
+    CHECK_NEAR(tdev_axis(&t)->width, 0.0, 1e-9);
     CHECK_NEAR(tdev_getf(&t, WSG_CMD_GET_FORCE), 40.0, 1e-3);
     CHECK_EQ(tdev_flags(&t), WSG_SF_REFERENCED | WSG_SF_BLOCKED_MINUS |
                                  WSG_SF_TARGET_POS_REACHED);
@@ -690,20 +692,20 @@ static void test_grasp_end_stop(void)
     CHECK_EQ(tdev_final(&t, WSG_CMD_RELEASE, 4000), WSG_E_SUCCESS);
     CHECK_EQ(tdev_cmd2f(&t, WSG_CMD_GRASP, 12.0f, 100.0f), WSG_E_CMD_PENDING);
     CHECK_EQ(tdev_final(&t, WSG_CMD_GRASP, 4000), WSG_E_CMD_FAILED);
-    CHECK_NEAR(t.dev.axis.width, 2.0, 1e-9);
+    CHECK_NEAR(tdev_axis(&t)->width, 2.0, 1e-9);
 
     /* outside grasps at the open end stop: the same rule */
     CHECK_EQ(tdev_cmd2f(&t, WSG_CMD_GRASP, 105.0f, 100.0f), WSG_E_CMD_PENDING);
     CHECK_EQ(tdev_final(&t, WSG_CMD_GRASP, 4000), WSG_E_SUCCESS);
     CHECK_EQ(tdev_grasp_state(&t), WSG_GS_HOLDING);
-    CHECK_NEAR(t.dev.axis.width, 110.0, 1e-9);
+    CHECK_NEAR(tdev_axis(&t)->width, 110.0, 1e-9);
     CHECK(tdev_flags(&t) & WSG_SF_BLOCKED_PLUS);
     CHECK_EQ(tdev_cmd2f(&t, WSG_CMD_RELEASE, 50.0f, 400.0f),
              WSG_E_CMD_PENDING);
     CHECK_EQ(tdev_final(&t, WSG_CMD_RELEASE, 4000), WSG_E_SUCCESS);
     CHECK_EQ(tdev_cmd2f(&t, WSG_CMD_GRASP, 95.0f, 100.0f), WSG_E_CMD_PENDING);
     CHECK_EQ(tdev_final(&t, WSG_CMD_GRASP, 4000), WSG_E_CMD_FAILED);
-    CHECK_NEAR(t.dev.axis.width, 105.0, 1e-9);
+    CHECK_NEAR(tdev_axis(&t)->width, 105.0, 1e-9);
 }
 
 /* The world changed under a clamp (the control channel does it between
@@ -714,28 +716,28 @@ static void test_world_at_once(void)
 
     tdev_init(&t);
     CHECK_EQ(tdev_home(&t, 0), WSG_E_SUCCESS);
-    wsg_axis_set_part(&t.dev.axis, 40.0, 0);
+    wsg_axis_set_part(tdev_axis(&t), 40.0, 0);
     CHECK_EQ(tdev_cmd2f(&t, WSG_CMD_GRASP, 40.0f, 100.0f), WSG_E_CMD_PENDING);
     CHECK_EQ(tdev_final(&t, WSG_CMD_GRASP, 4000), WSG_E_SUCCESS);
-    wsg_axis_set_part(&t.dev.axis, -1.0, 0);
-    wsg_axis_settle(&t.dev.axis);
+    wsg_axis_set_part(tdev_axis(&t), -1.0, 0);
+    wsg_axis_settle(tdev_axis(&t));
     CHECK_EQ(tdev_grasp_state(&t), WSG_GS_PART_LOST);
     CHECK(tdev_flags(&t) & WSG_SF_MOVING);
-    CHECK_EQ(t.dev.axis.force, 0.0);
+    CHECK_EQ(tdev_axis(&t)->force, 0.0);
 
     /* a part that grows while held holds the fingers where they are */
     tdev_steps(&t, 2000);
     CHECK_EQ(tdev_cmd2f(&t, WSG_CMD_RELEASE, 60.0f, 400.0f),
              WSG_E_CMD_PENDING);
     CHECK_EQ(tdev_final(&t, WSG_CMD_RELEASE, 4000), WSG_E_SUCCESS);
-    wsg_axis_set_part(&t.dev.axis, 40.0, 0);
+    wsg_axis_set_part(tdev_axis(&t), 40.0, 0);
     CHECK_EQ(tdev_cmd2f(&t, WSG_CMD_GRASP, 40.0f, 100.0f), WSG_E_CMD_PENDING);
     CHECK_EQ(tdev_final(&t, WSG_CMD_GRASP, 4000), WSG_E_SUCCESS);
-    wsg_axis_set_part(&t.dev.axis, 45.0, 0);
-    wsg_axis_settle(&t.dev.axis);
+    wsg_axis_set_part(tdev_axis(&t), 45.0, 0);
+    wsg_axis_settle(tdev_axis(&t));
     tdev_steps(&t, 10);
     CHECK_EQ(tdev_grasp_state(&t), WSG_GS_HOLDING);
-    CHECK_NEAR(t.dev.axis.width, 40.0 - 40.0 / 50.0, 1e-9);
+    CHECK_NEAR(tdev_axis(&t)->width, 40.0 - 40.0 / 50.0, 1e-9);
 }
 
 /* The model's ranges, as the daemon's options check their settings and the

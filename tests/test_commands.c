@@ -112,23 +112,23 @@ static void test_disconnect(void)
     /* its close causes no FAST STOP */
     wsg_device_session_closed(&t.dev, &t.sess[0].s);
     tdev_steps(&t, 1);
-    CHECK(!(wsg_axis_flags(&t.dev.axis) & WSG_SF_FAST_STOP));
+    CHECK(!(wsg_axis_flags(tdev_axis(&t)) & WSG_SF_FAST_STOP));
 
     /* a close without the announcement: FAST STOP */
     wsg_device_session_closed(&t.dev, &t.sess[1].s); /* not a connection */
     tdev_steps(&t, 1);
-    CHECK(!(wsg_axis_flags(&t.dev.axis) & WSG_SF_FAST_STOP));
+    CHECK(!(wsg_axis_flags(tdev_axis(&t)) & WSG_SF_FAST_STOP));
     t.sess[1].s.flags = WSG_SESSION_CONNECTION;
     wsg_device_session_closed(&t.dev, &t.sess[1].s);
     tdev_steps(&t, 1);
-    CHECK(wsg_axis_flags(&t.dev.axis) & WSG_SF_FAST_STOP);
+    CHECK(wsg_axis_flags(tdev_axis(&t)) & WSG_SF_FAST_STOP);
 
     /* unless the option turns it off */
     tdev_init(&t);
     t.dev.disconnect_fast_stop = 0;
     wsg_device_session_closed(&t.dev, &t.sess[0].s);
     tdev_steps(&t, 1);
-    CHECK(!(wsg_axis_flags(&t.dev.axis) & WSG_SF_FAST_STOP));
+    CHECK(!(wsg_axis_flags(tdev_axis(&t)) & WSG_SF_FAST_STOP));
 }
 
 static void test_homing(void)
@@ -210,7 +210,7 @@ static void test_preposition(void)
     CHECK(tdev_flags(&t) & WSG_SF_MOVING);
     CHECK_EQ(tdev_final(&t, WSG_CMD_PREPOSITION, 4000), WSG_E_SUCCESS);
     /* blocked by a part: E_AXIS_BLOCKED */
-    wsg_axis_set_part(&t.dev.axis, 20.0, 0);
+    wsg_axis_set_part(tdev_axis(&t), 20.0, 0);
     CHECK_EQ(tdev_move(&t, WSG_MOVE_STOP_ON_BLOCK, 0.0f, 100.0f),
              WSG_E_CMD_PENDING);
     CHECK_EQ(tdev_final(&t, WSG_CMD_PREPOSITION, 4000), WSG_E_AXIS_BLOCKED);
@@ -303,7 +303,7 @@ static void test_grasp_release(void)
     CHECK_EQ(tdev_cmd2f(&t, WSG_CMD_RELEASE, 60.0f, 100.0f),
              WSG_E_CMD_PENDING);
     CHECK_EQ(tdev_final(&t, WSG_CMD_RELEASE, 4000), WSG_E_SUCCESS);
-    wsg_axis_set_part(&t.dev.axis, 40.0, 0);
+    wsg_axis_set_part(tdev_axis(&t), 40.0, 0);
     CHECK_EQ(tdev_cmd2f(&t, WSG_CMD_GRASP, 40.0f, 100.0f), WSG_E_CMD_PENDING);
     CHECK_EQ(tdev_final(&t, WSG_CMD_GRASP, 4000), WSG_E_SUCCESS);
     CHECK_EQ(tdev_grasp_state(&t), WSG_GS_HOLDING);
@@ -417,7 +417,7 @@ static void test_tare(void)
     tdev_init_cfg(&t, &cfg);
     CHECK_EQ(tdev_cmd(&t, WSG_CMD_TARE, NULL, 0), WSG_E_SUCCESS);
     CHECK_EQ(tdev_home(&t, 0), WSG_E_SUCCESS);
-    wsg_axis_set_part(&t.dev.axis, 50.0, 0);
+    wsg_axis_set_part(tdev_axis(&t), 50.0, 0);
     CHECK_EQ(tdev_cmd2f(&t, WSG_CMD_GRASP, 50.0f, 100.0f), WSG_E_CMD_PENDING);
     /* grasping is force control mode too: D9 shows it, and tare is
      * refused whenever D9 is set (3.3.9) */
@@ -569,7 +569,7 @@ static void test_streams(void)
     p[0] = 1;
     wsg_put_u16(p + 1, 10);
     CHECK_EQ(tdev_cmd(&t, WSG_CMD_GET_WIDTH, p, 3), WSG_E_SUCCESS);
-    CHECK_EQ(t.dev.axis.time_us, 0 + t.dev.axis.time_us);
+    CHECK_EQ(wsg_axis_time(tdev_axis(&t)), 0 + wsg_axis_time(tdev_axis(&t)));
     tdev_clear(&t);
     for (i = 0; i < 100; i++) {
         wsg_device_step(&t.dev);

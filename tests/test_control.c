@@ -15,6 +15,13 @@ static int starts(const char *s, const char *prefix)
     return strncmp(s, prefix, strlen(prefix)) == 0;
 }
 
+static int has_part(const struct wsg_axis *ax)
+{
+    double w, k;
+
+    return wsg_axis_part(ax, &w, &k);
+}
+
 static void test_lines(void)
 {
     struct ctlbench b;
@@ -55,15 +62,14 @@ static void test_world(void)
     struct wsg_axis *ax;
 
     REQUIRE(ctlbench_open(&b, 2) == 0);
-    ax = &b.grippers[0].dev.axis;
+    ax = wsg_device_axis(&b.grippers[0].dev);
     CHECK(strcmp(ctlbench_cmd(&b, "part 40"), "ok part 40 50") == 0);
-    CHECK(ax->part);
+    CHECK(has_part(ax));
     CHECK(starts(ctlbench_cmd(&b, "part 400"), "error part: WIDTH"));
     CHECK(starts(ctlbench_cmd(&b, "part 40 -1"), "error part: STIFFNESS"));
     CHECK(strcmp(ctlbench_cmd(&b, "part none"), "ok part none") == 0);
-    CHECK(!ax->part);
+    CHECK(!has_part(ax));
     CHECK(strcmp(ctlbench_cmd(&b, "obstacle 30"), "ok obstacle 30") == 0);
-    CHECK(ax->obstacle);
     CHECK(starts(ctlbench_cmd(&b, "obstacle"), "error usage: obstacle"));
     /* A fault: its flag and its consequence when "ok" is there. */
     CHECK(strcmp(ctlbench_cmd(&b, "fault power on"), "ok fault power on") ==
@@ -75,8 +81,8 @@ static void test_world(void)
     /* The selected gripper: world commands act on it alone. */
     CHECK(strcmp(ctlbench_cmd(&b, "gripper 1"), "ok gripper 1 of 2") == 0);
     CHECK(strcmp(ctlbench_cmd(&b, "part 20"), "ok part 20 50") == 0);
-    CHECK(b.grippers[1].dev.axis.part);
-    CHECK(!ax->part);
+    CHECK(has_part(wsg_device_axis(&b.grippers[1].dev)));
+    CHECK(!has_part(ax));
     CHECK(starts(ctlbench_cmd(&b, "gripper 2"), "error gripper: N must be"));
     CHECK(starts(ctlbench_cmd(&b, "reset"), "ok reset"));
     CHECK(starts(ctlbench_cmd(&b, "drop"), "ok dropped 0"));
@@ -89,7 +95,7 @@ static void test_time(void)
     struct wsg_axis *ax;
 
     REQUIRE(ctlbench_open(&b, 1) == 0);
-    ax = &b.grippers[0].dev.axis;
+    ax = wsg_device_axis(&b.grippers[0].dev);
     CHECK(starts(ctlbench_cmd(&b, "time step 5"),
                  "error time step: not paused"));
     CHECK(strcmp(ctlbench_cmd(&b, "time pause"), "ok paused") == 0);
@@ -100,7 +106,7 @@ static void test_time(void)
     /* Time runs for the model: a power fault's FAST STOP survives it, a
      * step count is exact. */
     CHECK(strcmp(ctlbench_cmd(&b, "time step 1000"), "ok 1.005") == 0);
-    CHECK_EQ(ax->time_us, 1005000u);
+    CHECK_EQ(wsg_axis_time(ax), 1005000u);
     CHECK(starts(ctlbench_cmd(&b, "time scale 0"), "error time scale"));
     CHECK(starts(ctlbench_cmd(&b, "time scale 2"), "ok scale 2 paused"));
     CHECK(starts(ctlbench_cmd(&b, "time resume"), "ok running at scale 2"));

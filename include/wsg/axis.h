@@ -2,13 +2,15 @@
  * The finger axis model: a fixed-step simulation of one WSG gripper's
  * fingers, their drive and a part between them.
  *
- * Command handlers only record requests (wsg_axis_request_*) and write
- * session settings; the state changes only in wsg_axis_step(), which
- * advances simulated time by exactly one fixed step, and in
- * wsg_axis_settle(), a step of zero length that applies the requests. The
- * model reads no clock and does no I/O: the caller drives it, a test with a
- * fake clock, the daemon from a timerfd. Results of motion commands leave
- * through a callback.
+ * Command handlers only record requests (wsg_axis_request_*) and change
+ * session settings through setters; the state changes only in
+ * wsg_axis_step(), which advances simulated time by exactly one fixed
+ * step, and in wsg_axis_settle(), a step of zero length that applies the
+ * requests. The model reads no clock and does no I/O: the caller drives
+ * it, a test with a fake clock, the daemon from a timerfd. Results of
+ * motion commands leave through a callback. The struct's layout is the
+ * model's own (src/axis/axis_impl.h): everyone else reads the state
+ * through getters, and a holder keeps it in a struct wsg_axis_storage.
  *
  * Units: mm, mm/s, mm/s^2, N, microseconds. Width is the distance between
  * the fingers (0 = closed).
@@ -76,82 +78,25 @@ struct wsg_grasp_stats {
 typedef void (*wsg_axis_done_fn)(void *ctx, uint32_t tag, uint8_t cmd_id,
                                  uint16_t status);
 
-enum wsg_motion_kind {
-    WSG_MOTION_NONE = 0,
-    WSG_MOTION_HOMING,
-    WSG_MOTION_MOVE,
-    WSG_MOTION_GRASP,
-    WSG_MOTION_RELEASE,
-    WSG_MOTION_SNAP /* silent: a clamp released or a part lost */
-};
+/* The model's state. Its layout is private to src/axis (axis_impl.h):
+ * everyone else reads it through the getters below and changes it through
+ * the requests and setters, so the model alone keeps its invariants. */
+struct wsg_axis;
 
-/* A trapezoidal profile from rest; positions follow analytically from the
- * time since its start, so durations are exact to one step. */
-struct wsg_profile {
-    double start, dist, dir; /* dir = +1 or -1 */
-    double vmax, acc;
-    double t_acc, t_total; /* seconds */
-    int decel;             /* 0: runs into an end stop at speed */
-    double t;              /* seconds since start */
-};
-
-struct wsg_motion {
-    enum wsg_motion_kind kind;
-    uint8_t cmd_id;
-    uint32_t tag;
-    double target;  /* where the profile ends */
-    double nominal; /* grasp: the part's nominal width; homing: +1/-1 */
-    double speed;
-    uint8_t move_flags; /* preposition flags */
-    struct wsg_profile prof;
-};
-
-struct wsg_axis {
-    struct wsg_axis_config cfg;
-    wsg_axis_done_fn on_done;
-    void *done_ctx;
-
-    /* Physical state, changed only by wsg_axis_step. */
-    uint64_t time_us;
-    double width, speed, force;
-    int referenced;
-    int fast_stop;
-    uint32_t event_flags; /* AXIS_STOPPED, TARGET_POS_REACHED, BLOCKED_* */
-    enum wsg_grasp_state grasp_state;
-    struct wsg_grasp_stats stats;
-    struct wsg_motion motion;
-    int clamping;        /* motor pushes against a block */
-    double clamp_force;  /* the force limit when the block was found */
-    double clamp_target; /* where the fingers snap if the block goes */
-    double clamp_speed;
-    int clamp_dir;
-
-    /* Session settings, written directly by command handlers. */
-    double acc;
-    double force_limit;
-    int overdrive;
-    int soft_limits;
-    double soft_minus, soft_plus;
-
-    /* The world: a part between the fingers. */
-    int part;
-    double part_width, part_stiffness;
-    int obstacle; /* something rigid stands in the way */
-    double obstacle_width;
-    double ref_offset;       /* reported width - physical width: nonzero after
-                                homing into an obstacle */
-    uint32_t faults;         /* injected fault flags (WSG_FAULTS) */
-    uint32_t thermal_faults; /* TEMP_WARNING/TEMP_FAULT from the model */
-    uint32_t faults_seen;    /* faults whose consequences were applied */
-    double temperature;      /* degC, reported by 46h */
-
-    /* Requests recorded by handlers, applied by the next step in order:
-     * fast stop, acknowledge, stop, new motion. */
-    int req_fast_stop, req_ack, req_stop;
-    struct wsg_motion req_motion;
-    /* A request answered E_CMD_PENDING and cancelled by a Stop or FAST STOP
-     * before it started: it still owes its final E_CMD_ABORTED. */
-    struct wsg_motion req_cancelled;
+/* Room for one struct wsg_axis inside an object that holds the model by
+ * value (the device) without seeing its layout, so that holding it costs
+ * no allocation. axis.c checks at compile time that the struct fits and
+ * that this is aligned for it; the words' types are those the struct
+ * holds. Only the model reads or writes it, through a struct wsg_axis *
+ * to it. */
+#define WSG_AXIS_STORAGE_WORDS 100
+struct wsg_axis_storage {
+    union {
+        double d;
+        uint64_t u;
+        void *p;
+        void (*f)(void);
+    } w[WSG_AXIS_STORAGE_WORDS];
 };
 
 /* Models selectable by name: "wsg50" (default), "wsg50-210", "wsg32",
@@ -208,6 +153,38 @@ int wsg_axis_fast_stopped(const struct wsg_axis *ax);
 /* Moving or about to move: a new motion command gets E_ALREADY_RUNNING. */
 int wsg_axis_busy(const struct wsg_axis *ax);
 
+/* Reading the model: everyone outside the model reads its state through
+ * these. Each is a plain read of one value, cheap enough for the stream
+ * polling and the dispatcher's checks. */
+/* The configuration it was made with (limits, step length, sensor). */
+const struct wsg_axis_config *wsg_axis_cfg(const struct wsg_axis *ax);
+/* Simulated time in microseconds: steps taken and idle time advanced. */
+uint64_t wsg_axis_time(const struct wsg_axis *ax);
+/* The values the commands report: width (43h, as the gripper sees it,
+ * off by a wrong reference), speed (44h, signed), force (45h),
+ * temperature (46h, degC), grasping state (41h) and statistics (42h). */
+double wsg_axis_width(const struct wsg_axis *ax);
+double wsg_axis_speed(const struct wsg_axis *ax);
+double wsg_axis_force(const struct wsg_axis *ax);
+double wsg_axis_temperature(const struct wsg_axis *ax);
+enum wsg_grasp_state wsg_axis_grasp_state(const struct wsg_axis *ax);
+struct wsg_grasp_stats wsg_axis_stats(const struct wsg_axis *ax);
+/* Faults present (WSG_FAULTS bits): injected ones and the model's own
+ * temperature flags. */
+uint32_t wsg_axis_faults(const struct wsg_axis *ax);
+/* Homed: the commands that need a reference may run. */
+int wsg_axis_referenced(const struct wsg_axis *ax);
+/* Session settings. */
+double wsg_axis_acc(const struct wsg_axis *ax);
+double wsg_axis_force_limit(const struct wsg_axis *ax);
+/* 1 with the limits in *minus and *plus when soft limits are set, else 0
+ * with both untouched. */
+int wsg_axis_soft_limits(const struct wsg_axis *ax, double *minus,
+                         double *plus);
+/* 1 with its width and stiffness when a part is placed, else 0 with both
+ * untouched. */
+int wsg_axis_part(const struct wsg_axis *ax, double *width, double *stiffness);
+
 /* Requests. The motion requests validate against the current state and
  * return the immediate status (E_CMD_PENDING when accepted); speeds and
  * widths are clamped to the model's limits as the manual says. */
@@ -228,6 +205,13 @@ void wsg_axis_set_force_limit(struct wsg_axis *ax, double force);
 void wsg_axis_set_overdrive(struct wsg_axis *ax, int on);
 void wsg_axis_set_soft_limits(struct wsg_axis *ax, double minus, double plus);
 void wsg_axis_clear_soft_limits(struct wsg_axis *ax);
+/* Grasping statistics back to zero (42h with RESET). */
+void wsg_axis_clear_stats(struct wsg_axis *ax);
+
+/* Advance simulated time by nsteps steps without stepping. Only while
+ * wsg_axis_idle holds: then steps would change nothing but the time, so a
+ * caller may jump a quiet gap at once. */
+void wsg_axis_advance_idle(struct wsg_axis *ax, uint64_t nsteps);
 
 /* The world (control channel, tests). width < 0 removes the part. */
 void wsg_axis_set_part(struct wsg_axis *ax, double width, double stiffness);

@@ -10,6 +10,9 @@
  * asked may have gone by the time the motion ends. An optional output hook
  * takes every packet instead, for whoever makes the gripper answer later
  * (the daemon's --latency); it hands them on through wsg_device_transmit.
+ *
+ * The device holds its axis model by value, in storage whose layout only
+ * the model knows; wsg_device_axis hands out the model to drive and read.
  */
 #ifndef WSG_DEVICE_H
 #define WSG_DEVICE_H
@@ -68,7 +71,8 @@ struct wsg_device_info {
 };
 
 struct wsg_device {
-    struct wsg_axis axis;
+    /* The axis model: reach it through wsg_device_axis. */
+    struct wsg_axis_storage axis_storage;
     struct wsg_device_info info;
     char tag[WSG_TAG_MAX + 1];
     size_t tag_len;           /* 0: no device tag set */
@@ -99,6 +103,19 @@ void wsg_device_init(struct wsg_device *d, const struct wsg_axis_config *cfg);
 /* Power cycle: session settings back to defaults, not referenced, no
  * session streams. */
 void wsg_device_reset(struct wsg_device *d);
+
+/* The device's axis model (inline: the dispatcher and the stream polling
+ * reach it on every call). The model is initialised by wsg_device_init. */
+static inline struct wsg_axis *wsg_device_axis(struct wsg_device *d)
+{
+    return (struct wsg_axis *)(void *)&d->axis_storage;
+}
+
+static inline const struct wsg_axis *
+wsg_device_axis_const(const struct wsg_device *d)
+{
+    return (const struct wsg_axis *)(const void *)&d->axis_storage;
+}
 
 void wsg_session_init(struct wsg_session *s, uint32_t tag, unsigned flags,
                       wsg_send_fn send, void *ctx);

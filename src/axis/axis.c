@@ -18,13 +18,40 @@
  * The ranges of the values a model takes (wsg_axis_config_range) live here
  * once: the session commands clamp into them, and the daemon's options
  * check their settings against them.
+ *
+ * The state's layout (axis_impl.h) is this folder's alone: the getters
+ * here are how everyone else reads it, and the compile-time checks below
+ * hold struct wsg_axis_storage, in which a holder keeps it, to its size
+ * and alignment.
  */
 #include <errno.h>
 #include <math.h>
+#include <stddef.h>
 #include <string.h>
 
-#include "wsg/axis.h"
+#include "axis_impl.h"
 #include "wsg/proto.h"
+
+/* A holder's struct wsg_axis_storage must take the struct: big enough and
+ * aligned at least as strictly (C99 has no _Static_assert or _Alignof: an
+ * array of negative size fails the build, and the offset of a member after
+ * a char is its type's alignment). Growing the struct past it means
+ * raising WSG_AXIS_STORAGE_WORDS. */
+struct wsg_axis_align_need {
+    char c;
+    struct wsg_axis a;
+};
+struct wsg_axis_align_have {
+    char c;
+    struct wsg_axis_storage s;
+};
+typedef char wsg_axis_storage_fits
+    [sizeof(struct wsg_axis) <= sizeof(struct wsg_axis_storage) ? 1 : -1];
+typedef char
+    wsg_axis_storage_aligned[offsetof(struct wsg_axis_align_need, a) <=
+                                     offsetof(struct wsg_axis_align_have, s)
+                                 ? 1
+                                 : -1];
 
 /* Widths closer than this are the same position (well below the 0.01 mm
  * change threshold of 43h). */
@@ -822,6 +849,85 @@ int wsg_axis_busy(const struct wsg_axis *ax)
     return ax->motion.kind != WSG_MOTION_NONE;
 }
 
+const struct wsg_axis_config *wsg_axis_cfg(const struct wsg_axis *ax)
+{
+    return &ax->cfg;
+}
+
+uint64_t wsg_axis_time(const struct wsg_axis *ax)
+{
+    return ax->time_us;
+}
+
+double wsg_axis_width(const struct wsg_axis *ax)
+{
+    return ax->width;
+}
+
+double wsg_axis_speed(const struct wsg_axis *ax)
+{
+    return ax->speed;
+}
+
+double wsg_axis_force(const struct wsg_axis *ax)
+{
+    return ax->force;
+}
+
+double wsg_axis_temperature(const struct wsg_axis *ax)
+{
+    return ax->temperature;
+}
+
+enum wsg_grasp_state wsg_axis_grasp_state(const struct wsg_axis *ax)
+{
+    return ax->grasp_state;
+}
+
+struct wsg_grasp_stats wsg_axis_stats(const struct wsg_axis *ax)
+{
+    return ax->stats;
+}
+
+uint32_t wsg_axis_faults(const struct wsg_axis *ax)
+{
+    return ax->faults | ax->thermal_faults;
+}
+
+int wsg_axis_referenced(const struct wsg_axis *ax)
+{
+    return ax->referenced;
+}
+
+double wsg_axis_acc(const struct wsg_axis *ax)
+{
+    return ax->acc;
+}
+
+double wsg_axis_force_limit(const struct wsg_axis *ax)
+{
+    return ax->force_limit;
+}
+
+int wsg_axis_soft_limits(const struct wsg_axis *ax, double *minus,
+                         double *plus)
+{
+    if (!ax->soft_limits)
+        return 0;
+    *minus = ax->soft_minus;
+    *plus = ax->soft_plus;
+    return 1;
+}
+
+int wsg_axis_part(const struct wsg_axis *ax, double *width, double *stiffness)
+{
+    if (!ax->part)
+        return 0;
+    *width = ax->part_width;
+    *stiffness = ax->part_stiffness;
+    return 1;
+}
+
 /* A request answered E_CMD_PENDING; the next step starts it. */
 static uint16_t wsg_axis_request(struct wsg_axis *ax, enum wsg_motion_kind k,
                                  uint8_t id, double target, double speed,
@@ -983,6 +1089,16 @@ void wsg_axis_set_soft_limits(struct wsg_axis *ax, double minus, double plus)
 void wsg_axis_clear_soft_limits(struct wsg_axis *ax)
 {
     ax->soft_limits = 0;
+}
+
+void wsg_axis_clear_stats(struct wsg_axis *ax)
+{
+    memset(&ax->stats, 0, sizeof ax->stats);
+}
+
+void wsg_axis_advance_idle(struct wsg_axis *ax, uint64_t nsteps)
+{
+    ax->time_us += nsteps * ax->cfg.step_us;
 }
 
 void wsg_axis_set_part(struct wsg_axis *ax, double width, double stiffness)

@@ -28,14 +28,16 @@ static uint16_t wsg_cmd_disconnect(struct wsg_device *d, struct wsg_session *s,
                                    const struct wsg_frame *f,
                                    struct wsg_reply *r)
 {
+    struct wsg_axis *ax = wsg_device_axis(d);
+
     (void)f;
     (void)r;
     if (!(s->flags & WSG_SESSION_CONNECTION))
         return WSG_E_NOT_AVAILABLE;
     s->announced = 1;
     /* 3.1.2: a movement in progress is aborted immediately. */
-    if (d->axis.motion.kind != WSG_MOTION_NONE || wsg_axis_busy(&d->axis))
-        wsg_axis_request_stop(&d->axis);
+    if ((wsg_axis_flags(ax) & WSG_SF_MOVING) || wsg_axis_busy(ax))
+        wsg_axis_request_stop(ax);
     return WSG_E_SUCCESS;
 }
 
@@ -43,7 +45,7 @@ static uint16_t wsg_cmd_homing(struct wsg_device *d, struct wsg_session *s,
                                const struct wsg_frame *f, struct wsg_reply *r)
 {
     (void)r;
-    return wsg_axis_request_homing(&d->axis, f->payload[0], s->tag);
+    return wsg_axis_request_homing(wsg_device_axis(d), f->payload[0], s->tag);
 }
 
 static uint16_t wsg_cmd_preposition(struct wsg_device *d,
@@ -56,7 +58,8 @@ static uint16_t wsg_cmd_preposition(struct wsg_device *d,
     (void)r;
     if (flags & ~(WSG_MOVE_RELATIVE | WSG_MOVE_STOP_ON_BLOCK))
         return WSG_E_INVALID_PARAMETER;
-    return wsg_axis_request_move(&d->axis, flags, wsg_get_f32(f->payload + 1),
+    return wsg_axis_request_move(wsg_device_axis(d), flags,
+                                 wsg_get_f32(f->payload + 1),
                                  wsg_get_f32(f->payload + 5), s->tag);
 }
 
@@ -66,7 +69,7 @@ static uint16_t wsg_cmd_stop(struct wsg_device *d, struct wsg_session *s,
     (void)s;
     (void)f;
     (void)r;
-    wsg_axis_request_stop(&d->axis);
+    wsg_axis_request_stop(wsg_device_axis(d));
     return WSG_E_SUCCESS;
 }
 
@@ -77,7 +80,7 @@ static uint16_t wsg_cmd_fast_stop(struct wsg_device *d, struct wsg_session *s,
     (void)s;
     (void)f;
     (void)r;
-    wsg_axis_request_fast_stop(&d->axis);
+    wsg_axis_request_fast_stop(wsg_device_axis(d));
     return WSG_E_SUCCESS;
 }
 
@@ -89,7 +92,7 @@ static uint16_t wsg_cmd_ack(struct wsg_device *d, struct wsg_session *s,
     if (memcmp(f->payload, "ack", 3) != 0)
         return WSG_E_CMD_FORMAT_ERROR; /* 3.2.5: wrong key */
     /* Nothing to acknowledge is still a success: drivers send it blindly. */
-    wsg_axis_request_ack(&d->axis);
+    wsg_axis_request_ack(wsg_device_axis(d));
     return WSG_E_SUCCESS;
 }
 
@@ -97,7 +100,7 @@ static uint16_t wsg_cmd_grasp(struct wsg_device *d, struct wsg_session *s,
                               const struct wsg_frame *f, struct wsg_reply *r)
 {
     (void)r;
-    return wsg_axis_request_grasp(&d->axis, wsg_get_f32(f->payload),
+    return wsg_axis_request_grasp(wsg_device_axis(d), wsg_get_f32(f->payload),
                                   wsg_get_f32(f->payload + 4), s->tag);
 }
 
@@ -105,7 +108,8 @@ static uint16_t wsg_cmd_release(struct wsg_device *d, struct wsg_session *s,
                                 const struct wsg_frame *f, struct wsg_reply *r)
 {
     (void)r;
-    return wsg_axis_request_release(&d->axis, wsg_get_f32(f->payload),
+    return wsg_axis_request_release(wsg_device_axis(d),
+                                    wsg_get_f32(f->payload),
                                     wsg_get_f32(f->payload + 4), s->tag);
 }
 
@@ -125,7 +129,7 @@ static uint16_t wsg_cmd_set_acc(struct wsg_device *d, struct wsg_session *s,
     (void)r;
     if (isnan(acc))
         return WSG_E_INVALID_PARAMETER;
-    wsg_axis_set_acc(&d->axis, acc);
+    wsg_axis_set_acc(wsg_device_axis(d), acc);
     return WSG_E_SUCCESS;
 }
 
@@ -134,7 +138,7 @@ static uint16_t wsg_cmd_get_acc(struct wsg_device *d, struct wsg_session *s,
 {
     (void)s;
     (void)f;
-    return wsg_reply_f32(r, d->axis.acc);
+    return wsg_reply_f32(r, wsg_axis_acc(wsg_device_axis(d)));
 }
 
 static uint16_t wsg_cmd_set_force(struct wsg_device *d, struct wsg_session *s,
@@ -147,7 +151,7 @@ static uint16_t wsg_cmd_set_force(struct wsg_device *d, struct wsg_session *s,
     (void)r;
     if (isnan(force))
         return WSG_E_INVALID_PARAMETER;
-    wsg_axis_set_force_limit(&d->axis, force);
+    wsg_axis_set_force_limit(wsg_device_axis(d), force);
     return WSG_E_SUCCESS;
 }
 
@@ -158,7 +162,7 @@ static uint16_t wsg_cmd_get_force_limit(struct wsg_device *d,
 {
     (void)s;
     (void)f;
-    return wsg_reply_f32(r, d->axis.force_limit);
+    return wsg_reply_f32(r, wsg_axis_force_limit(wsg_device_axis(d)));
 }
 
 static uint16_t wsg_cmd_set_soft_limits(struct wsg_device *d,
@@ -172,7 +176,7 @@ static uint16_t wsg_cmd_set_soft_limits(struct wsg_device *d,
     (void)r;
     if (isnan(minus) || isnan(plus) || minus > plus)
         return WSG_E_INVALID_PARAMETER;
-    wsg_axis_set_soft_limits(&d->axis, minus, plus);
+    wsg_axis_set_soft_limits(wsg_device_axis(d), minus, plus);
     return WSG_E_SUCCESS;
 }
 
@@ -181,12 +185,14 @@ static uint16_t wsg_cmd_get_soft_limits(struct wsg_device *d,
                                         const struct wsg_frame *f,
                                         struct wsg_reply *r)
 {
+    double minus, plus;
+
     (void)s;
     (void)f;
-    if (!d->axis.soft_limits)
+    if (!wsg_axis_soft_limits(wsg_device_axis(d), &minus, &plus))
         return WSG_E_NOT_AVAILABLE;
-    wsg_reply_f32(r, d->axis.soft_minus);
-    return wsg_reply_f32(r, d->axis.soft_plus);
+    wsg_reply_f32(r, minus);
+    return wsg_reply_f32(r, plus);
 }
 
 static uint16_t wsg_cmd_clear_soft_limits(struct wsg_device *d,
@@ -197,7 +203,7 @@ static uint16_t wsg_cmd_clear_soft_limits(struct wsg_device *d,
     (void)s;
     (void)f;
     (void)r;
-    wsg_axis_clear_soft_limits(&d->axis);
+    wsg_axis_clear_soft_limits(wsg_device_axis(d));
     return WSG_E_SUCCESS;
 }
 
@@ -209,7 +215,7 @@ static uint16_t wsg_cmd_overdrive(struct wsg_device *d, struct wsg_session *s,
     (void)r;
     if (f->payload[0] & ~1u)
         return WSG_E_INVALID_PARAMETER;
-    wsg_axis_set_overdrive(&d->axis, f->payload[0] & 1u);
+    wsg_axis_set_overdrive(wsg_device_axis(d), f->payload[0] & 1u);
     return WSG_E_SUCCESS;
 }
 
@@ -219,11 +225,11 @@ static uint16_t wsg_cmd_tare(struct wsg_device *d, struct wsg_session *s,
     (void)s;
     (void)f;
     (void)r;
-    if (!d->axis.cfg.force_sensor)
+    if (!wsg_axis_cfg(wsg_device_axis(d))->force_sensor)
         return WSG_E_NOT_AVAILABLE;
     /* Only out of force control mode (3.3.9), which is what D9 shows:
      * the flag and the rule are one. */
-    if (wsg_axis_flags(&d->axis) & WSG_SF_FORCECNTL_MODE)
+    if (wsg_axis_flags(wsg_device_axis(d)) & WSG_SF_FORCECNTL_MODE)
         return WSG_E_ACCESS_DENIED;
     return WSG_E_SUCCESS;
 }
@@ -250,6 +256,7 @@ static uint16_t wsg_cmd_stream(struct wsg_device *d, struct wsg_session *s,
 {
     enum wsg_stream_id sid = wsg_stream_of(f->id);
     struct wsg_stream *st = &s->streams[sid];
+    uint32_t step_us = wsg_axis_cfg(wsg_device_axis(d))->step_us;
     float value;
 
     r->len = wsg_stream_value(d, sid, r->params, &value);
@@ -268,9 +275,9 @@ static uint16_t wsg_cmd_stream(struct wsg_device *d, struct wsg_session *s,
     st->change_only = (f->payload[0] >> 1) & 1u;
     /* PERIOD_MS 0 means as often as the model steps. */
     st->period_us = 1000u * wsg_get_u16(f->payload + 1);
-    if (st->period_us < d->axis.cfg.step_us)
-        st->period_us = d->axis.cfg.step_us;
-    st->due_us = d->axis.time_us + st->period_us;
+    if (st->period_us < step_us)
+        st->period_us = step_us;
+    st->due_us = wsg_axis_time(wsg_device_axis(d)) + st->period_us;
     st->last = value;
     return WSG_E_SUCCESS;
 }
@@ -280,17 +287,17 @@ static uint16_t wsg_cmd_grasp_stats(struct wsg_device *d,
                                     const struct wsg_frame *f,
                                     struct wsg_reply *r)
 {
-    struct wsg_grasp_stats *gs = &d->axis.stats;
+    struct wsg_grasp_stats gs = wsg_axis_stats(wsg_device_axis(d));
 
     (void)s;
     if (f->len && (f->payload[0] & ~1u))
         return WSG_E_INVALID_PARAMETER;
-    wsg_put_u32(r->params, gs->total);
-    wsg_put_u16(r->params + 4, gs->no_part);
-    wsg_put_u16(r->params + 6, gs->lost_part);
+    wsg_put_u32(r->params, gs.total);
+    wsg_put_u16(r->params + 4, gs.no_part);
+    wsg_put_u16(r->params + 6, gs.lost_part);
     r->len = 8;
     if (f->len && (f->payload[0] & 1u))
-        memset(gs, 0, sizeof *gs); /* reset after reading */
+        wsg_axis_clear_stats(wsg_device_axis(d)); /* reset after reading */
     return WSG_E_SUCCESS;
 }
 
@@ -301,8 +308,8 @@ static uint16_t wsg_cmd_temperature(struct wsg_device *d,
 {
     (void)s;
     (void)f;
-    wsg_put_u16(r->params,
-                (uint16_t)(int16_t)lround(d->axis.temperature * 10));
+    wsg_put_u16(r->params, (uint16_t)(int16_t)lround(
+                               wsg_axis_temperature(wsg_device_axis(d)) * 10));
     r->len = 2;
     return WSG_E_SUCCESS;
 }
@@ -359,7 +366,7 @@ static uint16_t wsg_cmd_system_limits(struct wsg_device *d,
                                       const struct wsg_frame *f,
                                       struct wsg_reply *r)
 {
-    const struct wsg_axis_config *c = &d->axis.cfg;
+    const struct wsg_axis_config *c = wsg_axis_cfg(wsg_device_axis(d));
 
     (void)s;
     (void)f;

@@ -44,7 +44,7 @@ static void wsg_device_done(void *ctx, uint32_t tag, uint8_t cmd_id,
 void wsg_device_init(struct wsg_device *d, const struct wsg_axis_config *cfg)
 {
     memset(d, 0, sizeof *d);
-    wsg_axis_init(&d->axis, cfg, wsg_device_done, d);
+    wsg_axis_init(wsg_device_axis(d), cfg, wsg_device_done, d);
     d->info.type = cfg->type;
     d->info.hwrev = 1;
     d->info.swrev = 0x2200; /* firmware 2.2.0 */
@@ -54,7 +54,7 @@ void wsg_device_init(struct wsg_device *d, const struct wsg_axis_config *cfg)
 
 void wsg_device_reset(struct wsg_device *d)
 {
-    wsg_axis_reset(&d->axis);
+    wsg_axis_reset(wsg_device_axis(d));
     d->cmd_failure = 0;
     /* A gripper that powers up again streams nothing until asked. */
     wsg_device_end_streams(d);
@@ -103,8 +103,8 @@ void wsg_device_session_closed(struct wsg_device *d, struct wsg_session *s)
         /* At once, as for a 23h: the motion is aborted now (its owner
          * told if still there; s itself no longer resolves), and the next
          * answer, to anyone, shows FAST STOP. */
-        wsg_axis_request_fast_stop(&d->axis);
-        wsg_axis_settle(&d->axis);
+        wsg_axis_request_fast_stop(wsg_device_axis(d));
+        wsg_axis_settle(wsg_device_axis(d));
     }
 }
 
@@ -188,7 +188,8 @@ void wsg_device_input_datagram(struct wsg_device *d, struct wsg_session *s,
 size_t wsg_stream_value(const struct wsg_device *d, enum wsg_stream_id sid,
                         uint8_t *out, float *value)
 {
-    const struct wsg_axis *ax = &d->axis;
+    const struct wsg_axis *ax = wsg_device_axis_const(d);
+    enum wsg_grasp_state gs;
     uint32_t flags;
 
     switch (sid) {
@@ -198,17 +199,18 @@ size_t wsg_stream_value(const struct wsg_device *d, enum wsg_stream_id sid,
         *value = (float)flags; /* exact: the flags stay below 2^24 */
         return 4;
     case WSG_STREAM_GRASP_STATE:
-        out[0] = (uint8_t)ax->grasp_state;
-        *value = (float)ax->grasp_state;
+        gs = wsg_axis_grasp_state(ax);
+        out[0] = (uint8_t)gs;
+        *value = (float)gs;
         return 1;
     case WSG_STREAM_WIDTH:
-        *value = (float)ax->width;
+        *value = (float)wsg_axis_width(ax);
         break;
     case WSG_STREAM_SPEED:
-        *value = (float)ax->speed;
+        *value = (float)wsg_axis_speed(ax);
         break;
     default:
-        *value = (float)ax->force;
+        *value = (float)wsg_axis_force(ax);
         break;
     }
     wsg_put_f32(out, *value);
@@ -217,7 +219,7 @@ size_t wsg_stream_value(const struct wsg_device *d, enum wsg_stream_id sid,
 
 void wsg_device_poll_streams(struct wsg_device *d, struct wsg_session *s)
 {
-    uint64_t now = d->axis.time_us;
+    uint64_t now = wsg_axis_time(wsg_device_axis(d));
     unsigned i;
 
     for (i = 0; i < WSG_STREAM_COUNT && s->nstreams; i++) {
@@ -257,17 +259,17 @@ void wsg_device_poll_streaming(struct wsg_device *d)
 
 void wsg_device_step(struct wsg_device *d)
 {
-    wsg_axis_step(&d->axis);
+    wsg_axis_step(wsg_device_axis(d));
 }
 
 int wsg_device_idle(const struct wsg_device *d)
 {
-    return wsg_axis_idle(&d->axis);
+    return wsg_axis_idle(wsg_device_axis_const(d));
 }
 
 int wsg_device_busy(const struct wsg_device *d)
 {
-    return d->streaming != NULL || !wsg_axis_idle(&d->axis);
+    return d->streaming != NULL || !wsg_axis_idle(wsg_device_axis_const(d));
 }
 
 /* Steps from now until a stream of s has a packet due, UINT64_MAX when
@@ -276,7 +278,8 @@ int wsg_device_busy(const struct wsg_device *d)
 static uint64_t wsg_device_stream_next(const struct wsg_device *d,
                                        const struct wsg_session *s)
 {
-    uint64_t now = d->axis.time_us, step = d->axis.cfg.step_us;
+    uint64_t now = wsg_axis_time(wsg_device_axis_const(d));
+    uint64_t step = wsg_axis_cfg(wsg_device_axis_const(d))->step_us;
     uint64_t best = UINT64_MAX;
     unsigned i;
 
@@ -307,7 +310,7 @@ uint64_t wsg_device_next(const struct wsg_device *d)
     const struct wsg_session *s;
     uint64_t best;
 
-    if (!wsg_axis_idle(&d->axis))
+    if (!wsg_axis_idle(wsg_device_axis_const(d)))
         return 1;
     best = UINT64_MAX;
     for (s = d->streaming; s && best > 1; s = s->stream_next) {
@@ -321,5 +324,5 @@ uint64_t wsg_device_next(const struct wsg_device *d)
 
 void wsg_device_advance_idle(struct wsg_device *d, uint64_t nsteps)
 {
-    d->axis.time_us += nsteps * d->axis.cfg.step_us;
+    wsg_axis_advance_idle(wsg_device_axis(d), nsteps);
 }

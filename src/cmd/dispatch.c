@@ -11,7 +11,7 @@ static uint16_t wsg_cmd_check(const struct wsg_device *d,
                               const struct wsg_cmd_desc *c,
                               const struct wsg_frame *f)
 {
-    const struct wsg_axis *ax = &d->axis;
+    const struct wsg_axis *ax = wsg_device_axis_const(d);
 
     if (s->announced)
         return WSG_E_ACCESS_DENIED; /* 3.1.2: waiting for the close */
@@ -24,10 +24,10 @@ static uint16_t wsg_cmd_check(const struct wsg_device *d,
         if (wsg_axis_fast_stopped(ax))
             return WSG_E_ACCESS_DENIED;
         /* Appendix B: a fault disables all movement-related commands. */
-        if ((ax->faults | ax->thermal_faults) & WSG_FAULTS_BLOCKING)
+        if (wsg_axis_faults(ax) & WSG_FAULTS_BLOCKING)
             return WSG_E_ACCESS_DENIED;
     }
-    if ((c->flags & WSG_CMDF_HOMED) && !ax->referenced)
+    if ((c->flags & WSG_CMDF_HOMED) && !wsg_axis_referenced(ax))
         return WSG_E_NOT_INITIALIZED;
     if ((c->flags & WSG_CMDF_ASYNC) && wsg_axis_busy(ax))
         return WSG_E_ALREADY_RUNNING;
@@ -53,5 +53,5 @@ void wsg_device_dispatch(struct wsg_device *d, struct wsg_session *s,
      * in the same read, sees the new state. Nothing else leaves requests
      * pending between commands: a close settles itself, and so does the
      * control channel. */
-    wsg_axis_settle(&d->axis);
+    wsg_axis_settle(wsg_device_axis(d));
 }

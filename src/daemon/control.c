@@ -121,8 +121,9 @@ static void format_time(char *buf, size_t len, uint64_t us)
 
 static void cmd_part(struct ctl_ctx *c, int argc, char **argv)
 {
-    struct wsg_axis *ax = &c->ctl->cur->dev.axis;
-    struct wsg_axis_range r = wsg_axis_config_range(&ax->cfg, WSG_AXIS_WIDTH);
+    struct wsg_axis *ax = wsg_device_axis(&c->ctl->cur->dev);
+    struct wsg_axis_range r =
+        wsg_axis_config_range(wsg_axis_cfg(ax), WSG_AXIS_WIDTH);
     double width, stiffness = 0.0;
 
     if (argc == 2 && strcmp(argv[1], "none") == 0) {
@@ -144,13 +145,16 @@ static void cmd_part(struct ctl_ctx *c, int argc, char **argv)
         return;
     }
     wsg_axis_set_part(ax, width, stiffness);
-    reply(c, "ok part %g %g", ax->part_width, ax->part_stiffness);
+    /* The stiffness as taken: the model's default for none given. */
+    wsg_axis_part(ax, &width, &stiffness);
+    reply(c, "ok part %g %g", width, stiffness);
 }
 
 static void cmd_obstacle(struct ctl_ctx *c, int argc, char **argv)
 {
-    struct wsg_axis *ax = &c->ctl->cur->dev.axis;
-    struct wsg_axis_range r = wsg_axis_config_range(&ax->cfg, WSG_AXIS_WIDTH);
+    struct wsg_axis *ax = wsg_device_axis(&c->ctl->cur->dev);
+    struct wsg_axis_range r =
+        wsg_axis_config_range(wsg_axis_cfg(ax), WSG_AXIS_WIDTH);
     double width;
 
     if (argc != 2) {
@@ -200,7 +204,8 @@ static void cmd_fault(struct ctl_ctx *c, int argc, char **argv)
     }
     for (i = 0; i < sizeof faults / sizeof faults[0]; i++) {
         if (strcmp(argv[1], faults[i].name) == 0) {
-            wsg_axis_set_fault(&c->ctl->cur->dev.axis, faults[i].flag, on);
+            wsg_axis_set_fault(wsg_device_axis(&c->ctl->cur->dev),
+                               faults[i].flag, on);
             reply(c, "ok fault %s %s", faults[i].name, on ? "on" : "off");
             return;
         }
@@ -217,14 +222,16 @@ static void reply_time(struct ctl_ctx *c)
 
     /* Steps run by hand may have left the gripper idle part way. */
     wsg_sched_touch(c->ctl->sched, c->ctl->cur);
-    format_time(t, sizeof t, c->ctl->cur->dev.axis.time_us);
+    format_time(t, sizeof t,
+                wsg_axis_time(wsg_device_axis(&c->ctl->cur->dev)));
     reply(c, "ok %s", t);
 }
 
 static void cmd_time(struct ctl_ctx *c, int argc, char **argv)
 {
     struct wsg_sched *l = c->ctl->sched;
-    uint32_t step_us = c->ctl->cur->dev.axis.cfg.step_us;
+    uint32_t step_us =
+        wsg_axis_cfg(wsg_device_axis(&c->ctl->cur->dev))->step_us;
     double v;
     int r;
 
@@ -319,23 +326,24 @@ static void cmd_state(struct ctl_ctx *c, int argc, char **argv)
     (void)argv;
     const struct wsg_gripper *g = c->ctl->cur;
     const struct wsg_device *d = &g->dev;
-    const struct wsg_axis *ax = &d->axis;
+    const struct wsg_axis *ax = wsg_device_axis_const(d);
     const struct wsg_sched *l = c->ctl->sched;
     uint32_t flags =
         wsg_axis_flags(ax) | (d->cmd_failure ? WSG_SF_CMD_FAILURE : 0u);
-    unsigned gs = (unsigned)ax->grasp_state;
+    unsigned gs = (unsigned)wsg_axis_grasp_state(ax);
+    struct wsg_grasp_stats stats = wsg_axis_stats(ax);
     char buf[WSG_CTL_REPLY_MAX - 8];
     char t[32], key[32], gs_key[32];
     size_t used = 0;
     unsigned i;
     int first = 1;
 
-    format_time(t, sizeof t, ax->time_us);
+    format_time(t, sizeof t, wsg_axis_time(ax));
     append(buf, sizeof buf, &used,
            "{\"width\":%.3f,\"speed\":%.3f,\"force\":%.3f,"
            "\"temperature\":%.2f,\"flags\":%lu,\"flag_names\":[",
-           ax->width, ax->speed, ax->force, ax->temperature,
-           (unsigned long)flags);
+           wsg_axis_width(ax), wsg_axis_speed(ax), wsg_axis_force(ax),
+           wsg_axis_temperature(ax), (unsigned long)flags);
     /* The manual's names in the channel's spelling ("fast_stop"). */
     for (i = 0; i < 32; i++) {
         if (!(flags & (1u << i)) || !wsg_system_flag_names[i])
@@ -353,10 +361,9 @@ static void cmd_state(struct ctl_ctx *c, int argc, char **argv)
            "\"stats\":{\"total\":%lu,\"no_part\":%u,\"lost_part\":%u},"
            "\"time\":%s,\"paused\":%s,\"scale\":%g,"
            "\"delayed\":%lu,\"delay_dropped\":%llu}",
-           gs, gs_key, (unsigned long)ax->stats.total,
-           (unsigned)ax->stats.no_part, (unsigned)ax->stats.lost_part, t,
-           l->paused ? "true" : "false", l->scale,
-           (unsigned long)wsg_gripper_delayed(g),
+           gs, gs_key, (unsigned long)stats.total, (unsigned)stats.no_part,
+           (unsigned)stats.lost_part, t, l->paused ? "true" : "false",
+           l->scale, (unsigned long)wsg_gripper_delayed(g),
            (unsigned long long)wsg_gripper_delay_dropped(g));
     reply(c, "ok %s", buf);
 }
@@ -465,7 +472,7 @@ static void run_line(struct ctl_ctx *c, char *line)
     c->ctl->cur = &c->ctl->sched->grippers[c->s->gripper];
     wsg_sched_touch(c->ctl->sched, c->ctl->cur);
     run_command(c, argc, argv);
-    wsg_axis_settle(&c->ctl->cur->dev.axis);
+    wsg_axis_settle(wsg_device_axis(&c->ctl->cur->dev));
     wsg_sched_check(c->ctl->sched, c->ctl->cur);
 }
 

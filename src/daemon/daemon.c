@@ -145,7 +145,7 @@ static int open_gripper(struct wsg_daemon *d, struct wsg_gripper *g,
         g->dev.tag[g->dev.tag_len] = '\0';
     }
     if (o.initial_part.given)
-        wsg_axis_set_part(&g->dev.axis, o.initial_part.value,
+        wsg_axis_set_part(wsg_device_axis(&g->dev), o.initial_part.value,
                           o.initial_part_stiffness);
     if (d->log.f)
         wsg_log_attach(&d->log, &g->tap, &g->dev,

@@ -31,7 +31,8 @@ static void gripper_delay(void *ctx, struct wsg_session *s, const uint8_t *pkt,
         return;
     }
     dl = &g->delay[idx - 1];
-    r = wsg_delay_push(dl, g->dev.axis.time_us, s->tag, pkt, len);
+    r = wsg_delay_push(dl, wsg_axis_time(wsg_device_axis(&g->dev)), s->tag,
+                       pkt, len);
     if (r == 1)
         wsg_device_transmit(&g->dev, s, pkt, len);
     else if (r < 0 && dl->burst == 1)
@@ -80,8 +81,9 @@ void wsg_gripper_release(struct wsg_gripper *g)
         return;
     for (i = 0; i < g->ntransports; i++)
         if (wsg_delay_pending(&g->delay[i]))
-            wsg_delay_release(&g->delay[i], g->dev.axis.time_us, gripper_out,
-                              g);
+            wsg_delay_release(&g->delay[i],
+                              wsg_axis_time(wsg_device_axis(&g->dev)),
+                              gripper_out, g);
 }
 
 size_t wsg_gripper_delayed(const struct wsg_gripper *g)
@@ -106,7 +108,8 @@ uint64_t wsg_gripper_delay_dropped(const struct wsg_gripper *g)
 uint64_t wsg_gripper_next(const struct wsg_gripper *g)
 {
     uint64_t best = wsg_device_next(&g->dev);
-    uint64_t now = g->dev.axis.time_us, step = g->dev.axis.cfg.step_us;
+    const struct wsg_axis *ax = wsg_device_axis_const(&g->dev);
+    uint64_t now = wsg_axis_time(ax), step = wsg_axis_cfg(ax)->step_us;
     size_t i;
 
     for (i = 0; g->delay && i < g->ntransports && best > 1; i++) {

@@ -35,7 +35,7 @@ struct wsg_gripper {
     size_t ntransports;
     /* The scheduler's: the grid step of its deadline, its place in the
      * deadline heap, and the link of the list of grippers touched in this
-     * batch. Its time is its model's (dev.axis.time_us). */
+     * batch. Its time is its model's (wsg_axis_time). */
     struct wsg_sched *sched;
     uint64_t due;
     size_t heap_idx;

@@ -151,7 +151,7 @@ static void head(struct wsg_log_tap *tap, struct line *l,
     struct wsg_log *lg = tap->log;
     struct timespec ts;
     const char *name = wsg_cmd_name(id);
-    uint64_t t = tap->dev->axis.time_us;
+    uint64_t t = wsg_axis_time(wsg_device_axis_const(tap->dev));
 
     clock_gettime(CLOCK_REALTIME, &ts);
     if (ts.tv_sec != lg->sec || lg->clock[0] == '\0') {

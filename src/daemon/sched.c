@@ -119,7 +119,8 @@ static void schedule(struct wsg_sched *s, struct wsg_gripper *g, uint64_t due)
  * step its model's time counts (one clock, read in steps). */
 static void run_to_grid(struct wsg_sched *s, struct wsg_gripper *g)
 {
-    uint64_t at = g->dev.axis.time_us / g->dev.axis.cfg.step_us, k;
+    const struct wsg_axis *ax = wsg_device_axis(&g->dev);
+    uint64_t at = wsg_axis_time(ax) / wsg_axis_cfg(ax)->step_us, k;
 
     if (at < s->grid)
         s->stats.dev_steps += wsg_gripper_process(g, s->grid - at);

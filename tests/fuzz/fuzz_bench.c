@@ -24,6 +24,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "axis_impl.h"
 #include "wsg/device.h"
 
 /* Tags are unique per run; a closed session's peer gets a fresh one. */
@@ -100,7 +101,7 @@ static int fuzz_reply_fits(uint8_t id, size_t plen)
 /* Flag combinations the manual rules out, in any reported state word. */
 static void fuzz_check_flags(uint32_t f)
 {
-    const struct wsg_axis *ax = &B.dev.axis;
+    const struct wsg_axis *ax = wsg_device_axis(&B.dev);
 
     FUZZ_CHECK((f & ~(uint32_t)WSG_SF_ALL) == 0);
     /* FAST STOP halts the axis in the step that applies it. Between its
@@ -123,7 +124,7 @@ static void fuzz_check_flags(uint32_t f)
  * reference is true. */
 static void fuzz_check_model(void)
 {
-    const struct wsg_axis *ax = &B.dev.axis;
+    const struct wsg_axis *ax = wsg_device_axis(&B.dev);
     const struct wsg_axis_config *c = &ax->cfg;
     double phys = ax->width - ax->ref_offset;
 
@@ -155,8 +156,8 @@ static void fuzz_trace_in(void *ctx, const struct wsg_session *s,
     FUZZ_CHECK(ev != WSG_PARSE_FRAME || f->len <= WSG_PAYLOAD_MAX);
     if (B.trace)
         fprintf(stderr, "t=%lu in  s%u ev%d id %02x len %u\n",
-                (unsigned long)B.dev.axis.time_us, (unsigned)s->tag, (int)ev,
-                f->id, (unsigned)f->len);
+                (unsigned long)wsg_device_axis(&B.dev)->time_us,
+                (unsigned)s->tag, (int)ev, f->id, (unsigned)f->len);
     B.event = 1;
     B.event_ev = ev;
     B.event_id = f->id;
@@ -214,8 +215,8 @@ static void fuzz_send(struct wsg_session *s, const uint8_t *pkt, size_t len)
     FUZZ_CHECK(plen == 0 || status == WSG_E_SUCCESS);
     if (B.trace)
         fprintf(stderr, "t=%lu out s%u ph%d id %02x %s\n",
-                (unsigned long)B.dev.axis.time_us, (unsigned)s->tag,
-                (int)B.phase, id, wsg_status_name(status));
+                (unsigned long)wsg_device_axis(&B.dev)->time_us,
+                (unsigned)s->tag, (int)B.phase, id, wsg_status_name(status));
 
     /* A final result the model just handed to lookup: from a step, or
      * settled around a received command (a Stop ends a motion, a command
@@ -258,8 +259,9 @@ static struct wsg_session *fuzz_lookup(void *ctx, uint32_t tag)
     B.owed[tag]--;
     if (B.trace)
         fprintf(stderr, "t=%lu final for tag %u: width %g ref_offset %g\n",
-                (unsigned long)B.dev.axis.time_us, (unsigned)tag,
-                B.dev.axis.width, B.dev.axis.ref_offset);
+                (unsigned long)wsg_device_axis(&B.dev)->time_us, (unsigned)tag,
+                wsg_device_axis(&B.dev)->width,
+                wsg_device_axis(&B.dev)->ref_offset);
     for (i = 0; i < 2; i++)
         if (B.sess[i].s.tag == tag && !B.sess[i].closing) {
             B.final_sess = &B.sess[i].s;
@@ -326,7 +328,7 @@ static void fuzz_world(unsigned ev, const uint8_t *data, size_t len)
     static const uint32_t faults[] = {WSG_SF_TEMP_WARNING, WSG_SF_TEMP_FAULT,
                                       WSG_SF_POWER_FAULT, WSG_SF_CURR_FAULT,
                                       WSG_SF_FINGER_FAULT};
-    struct wsg_axis *ax = &B.dev.axis;
+    struct wsg_axis *ax = wsg_device_axis(&B.dev);
     unsigned i;
     int k;
 
@@ -369,7 +371,7 @@ static void fuzz_world(unsigned ev, const uint8_t *data, size_t len)
     default:
         return;
     }
-    wsg_axis_settle(&B.dev.axis);
+    wsg_axis_settle(wsg_device_axis(&B.dev));
 }
 
 void fuzz_bench_chunk(uint8_t ctl, const uint8_t *data, size_t len)
@@ -403,7 +405,7 @@ void fuzz_bench_chunk(uint8_t ctl, const uint8_t *data, size_t len)
 /* No motion running, requested or owing its abort. */
 static int fuzz_quiet(void)
 {
-    const struct wsg_axis *ax = &B.dev.axis;
+    const struct wsg_axis *ax = wsg_device_axis(&B.dev);
 
     return ax->motion.kind == WSG_MOTION_NONE &&
            ax->req_motion.kind == WSG_MOTION_NONE &&

@@ -89,11 +89,11 @@ int FUZZ_ENTRY(const uint8_t *data, size_t size)
         abort();
     }
     for (i = 0; i < b.ngrippers; i++) {
-        const struct wsg_axis *ax = &b.grippers[i].dev.axis;
+        const struct wsg_axis *ax = wsg_device_axis_const(&b.grippers[i].dev);
+        double w = wsg_axis_width(ax);
 
-        if (!(ax->width >= -1e-6 && ax->width <= ax->cfg.stroke + 1e-6)) {
-            fprintf(stderr, "fuzz_control: gripper %zu at width %g\n", i,
-                    ax->width);
+        if (!(w >= -1e-6 && w <= wsg_axis_cfg(ax)->stroke + 1e-6)) {
+            fprintf(stderr, "fuzz_control: gripper %zu at width %g\n", i, w);
             abort();
         }
     }
