@@ -22,7 +22,8 @@ DIR=$2
 shift 2
 
 # The tests that hold under valgrind (the daemon runs some 20-50 times
-# slower; these were checked to pass under it, each in under 35 s). Left
+# slower; these were checked to pass under it, each in under 50 s, most of
+# it the quiet windows, ten times as long here). Left
 # out: integ_hostile (it bounds the daemon's RSS, which under valgrind is
 # valgrind's own; and it floods the daemon against deadlines), the `can`
 # test (it runs in a VM without valgrind), scenarios (a shell script that
@@ -58,7 +59,8 @@ for t in "$@"; do
     st=0
     t0=$(date +%s)
     # shellcheck disable=SC2086 # no transport: no argument
-    timeout -k 5 120 "$DIR/$name" "$EXE" $tp </dev/null || st=$?
+    # A bound on a hang only: a loaded machine may take twice as long.
+    timeout -k 5 300 "$DIR/$name" "$EXE" $tp </dev/null || st=$?
     echo "--- $name${tp:+ $tp}: status $st, $(($(date +%s) - t0)) s"
     case $st in
     0) passed=$((passed + 1)) ;;

@@ -249,9 +249,13 @@ static void test_change_only(struct emu *e)
     for (;;) {
         /* After the result, the last changes: until the streams have been
          * quiet for a window (at rest they fall silent), so a late packet
-         * is counted here, not taken for one sent at rest. */
-        if (t_end > 0)
+         * is counted here, not taken for one sent at rest; streams that
+         * never fall silent end the loop at the bound. */
+        if (t_end > 0) {
             deadline = emu_now_ms() + EMU_QUIET_MS;
+            if (deadline > t_end + EMU_MOVE_MS)
+                deadline = t_end + EMU_MOVE_MS;
+        }
         int left = (int)(deadline - emu_now_ms());
         if (left <= 0 || emu_recv(&s, &f, left) != 1)
             break;
