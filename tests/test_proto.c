@@ -1,8 +1,10 @@
 /*
  * The protocol layer: the CRC of Appendix C against the manual's example
  * packets, frame encoding, and the incremental parser under every split of
- * its input, garbage, bad checksums and oversized SIZE fields.
+ * its input, garbage, bad checksums and oversized SIZE fields; numbers as
+ * the documentation writes them.
  */
+#include <errno.h>
 #include <string.h>
 
 #include "check.h"
@@ -246,6 +248,34 @@ static void test_status_names(void)
     CHECK(strcmp(wsg_status_name(31), "E_UNKNOWN") == 0);
 }
 
+/* Numbers as the documentation writes them: decimal or 0x hex, never
+ * octal, nothing else around them. */
+static void test_numbers(void)
+{
+    unsigned long v = 0;
+
+    CHECK_EQ(wsg_parse_ulong("010", 0x7FF, &v), 0);
+    CHECK_EQ(v, 10);
+    CHECK_EQ(wsg_parse_ulong("08", 0x7FF, &v), 0);
+    CHECK_EQ(v, 8);
+    CHECK_EQ(wsg_parse_ulong("0x7fE", 0x7FF, &v), 0);
+    CHECK_EQ(v, 0x7FE);
+    CHECK_EQ(wsg_parse_ulong("0X10", 0x7FF, &v), 0);
+    CHECK_EQ(v, 16);
+    CHECK_EQ(wsg_parse_ulong("0", 0, &v), 0);
+    CHECK_EQ(v, 0);
+    CHECK_EQ(wsg_parse_ulong("", 10, &v), -EINVAL);
+    CHECK_EQ(wsg_parse_ulong("0x", 10, &v), -EINVAL);
+    CHECK_EQ(wsg_parse_ulong(" 1", 10, &v), -EINVAL);
+    CHECK_EQ(wsg_parse_ulong("-1", 10, &v), -EINVAL);
+    CHECK_EQ(wsg_parse_ulong("+1", 10, &v), -EINVAL);
+    CHECK_EQ(wsg_parse_ulong("1a", 100, &v), -EINVAL);
+    CHECK_EQ(wsg_parse_ulong("256", 255, &v), -ERANGE);
+    CHECK_EQ(wsg_parse_ulong("0x800", 0x7FF, &v), -ERANGE);
+    CHECK_EQ(wsg_parse_ulong("99999999999999999999999", 0xFFFFFFFFul, &v),
+             -ERANGE);
+}
+
 int main(void)
 {
     test_crc_examples();
@@ -256,5 +286,6 @@ int main(void)
     test_parser_oversize();
     test_parser_reply_max();
     test_status_names();
+    test_numbers();
     TEST_EXIT();
 }

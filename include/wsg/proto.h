@@ -91,4 +91,9 @@ int wsg_parser_partial(const struct wsg_parser *p, uint8_t *id);
 size_t wsg_parser_feed(struct wsg_parser *p, const uint8_t *data, size_t len,
                        enum wsg_parse_event *ev, struct wsg_frame *frame);
 
+/* A number as the documentation writes one: decimal digits, or 0x (0X)
+ * and hex digits (010 is ten), at most max. Returns 0, -EINVAL for other
+ * text, -ERANGE above max. */
+int wsg_parse_ulong(const char *s, unsigned long max, unsigned long *out);
+
 #endif

@@ -99,39 +99,6 @@ static int parse_udp(const char *arg, struct wsg_endpoint *ep,
     return parse_endpoint(buf, ep);
 }
 
-/* Decimal digits, or 0x (0X) and hex digits, as the documentation gives
- * numbers: strtoul with base 0 would read 010 as octal 8, refuse 08, and
- * take blanks and signs. */
-static int parse_dec_hex(const char *s, unsigned long max, unsigned long *out)
-{
-    unsigned long v = 0, base = 10;
-
-    if (s[0] == '0' && (s[1] == 'x' || s[1] == 'X')) {
-        base = 16;
-        s += 2;
-    }
-    if (*s == '\0')
-        return -EINVAL;
-    for (; *s; s++) {
-        unsigned long d;
-
-        if (*s >= '0' && *s <= '9')
-            d = (unsigned long)(*s - '0');
-        else if (base == 16 && *s >= 'a' && *s <= 'f')
-            d = (unsigned long)(*s - 'a' + 10);
-        else if (base == 16 && *s >= 'A' && *s <= 'F')
-            d = (unsigned long)(*s - 'A' + 10);
-        else
-            return -EINVAL;
-        /* v * base + d > max, asked without overflowing */
-        if (d > max || v > (max - d) / base)
-            return -ERANGE;
-        v = v * base + d;
-    }
-    *out = v;
-    return 0;
-}
-
 /* IFACE[:ID], ID decimal or 0x-prefixed hex, 0..max. */
 static int parse_can(char *arg, unsigned long max, const char **iface,
                      uint16_t *id)
@@ -141,7 +108,7 @@ static int parse_can(char *arg, unsigned long max, const char **iface,
 
     if (colon) {
         *colon = '\0';
-        if (parse_dec_hex(colon + 1, max, &v) < 0)
+        if (wsg_parse_ulong(colon + 1, max, &v) < 0)
             return -EINVAL;
         *id = (uint16_t)v;
     }

@@ -72,36 +72,10 @@ int parse_float(const char *s, float *v)
 }
 
 /* Decimal digits, or 0x (0X) and hex digits, as WSG Commander and the
- * documentation write numbers: strtoul with base 0 would read 010 as octal
- * 8, refuse 08, and take blanks and signs. */
+ * documentation write numbers (wsg_parse_ulong): 0 or -1. */
 int parse_ulong(const char *s, unsigned long max, unsigned long *v)
 {
-    unsigned long n = 0, base = 10;
-
-    if (s[0] == '0' && (s[1] == 'x' || s[1] == 'X')) {
-        base = 16;
-        s += 2;
-    }
-    if (*s == '\0')
-        return -1;
-    for (; *s; s++) {
-        unsigned long d;
-
-        if (*s >= '0' && *s <= '9')
-            d = (unsigned long)(*s - '0');
-        else if (base == 16 && *s >= 'a' && *s <= 'f')
-            d = (unsigned long)(*s - 'a' + 10);
-        else if (base == 16 && *s >= 'A' && *s <= 'F')
-            d = (unsigned long)(*s - 'A' + 10);
-        else
-            return -1;
-        /* n * base + d > max, asked without overflowing */
-        if (d > max || n > (max - d) / base)
-            return -1;
-        n = n * base + d;
-    }
-    *v = n;
-    return 0;
+    return wsg_parse_ulong(s, max, v) < 0 ? -1 : 0;
 }
 
 /* "HOST:PORT" (and ":LOCAL" for UDP) into its parts; host is copied. */
