@@ -128,7 +128,11 @@ static size_t read_until_quiet(struct emu_client *c, uint8_t *buf, size_t cap,
     size_t got = 0;
 
     while (got < cap) {
-        long n = emu_recv_raw(c, buf + got, cap - got, quiet_ms);
+        /* The first bytes may be long in coming on a loaded machine (or
+         * under valgrind): that wait is a bound like any reply's. Once
+         * they flow, a quiet spell means the end. */
+        long n = emu_recv_raw(c, buf + got, cap - got,
+                              got ? quiet_ms : EMU_REPLY_MS);
 
         if (n <= 0)
             break;

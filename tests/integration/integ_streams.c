@@ -36,6 +36,15 @@ static const struct emu_transport *tp;
 /* The daemon's control channel: simulated time. */
 static struct ctl k;
 
+/* The gripper's simulated time, from the control channel. */
+static long long sim_us(void)
+{
+    long long t = ctl_time_us(ctl_cmd(&k, "time"));
+
+    CHECK(t >= 0);
+    return t;
+}
+
 /* Payload length of a successful reply of a stream command. */
 static unsigned value_len(uint8_t id)
 {
@@ -149,6 +158,7 @@ static void test_period(struct emu *e)
     CHECK_NEAR(wsg_get_f32(EMU_PARAMS(&f)), 110.0, 0.5);
 
     /* ~500 ms of a 20 ms stream: 25 packets. */
+    long long sim0 = sim_us();
     double start = emu_now_ms(), end = start + 500;
     while (n < 200) {
         int left = (int)(end - emu_now_ms());
@@ -159,12 +169,16 @@ static void test_period(struct emu *e)
         t[n++] = EMU_T_MS(&f);
     }
     double elapsed = emu_now_ms() - start;
+    double sim = (double)(sim_us() - sim0) / 1000.0;
     for (unsigned i = 1; i < n; i++)
         iv[i - 1] = t[i] - t[i - 1];
     double med = median(iv, n > 1 ? n - 1 : 0);
-    printf("43h @20 ms: %u packets in %.0f ms, median interval %.1f ms\n", n,
-           elapsed, med);
-    CHECK(count_ok(n, elapsed / 20.0));
+    printf("43h @20 ms: %u packets in %.0f ms (%.0f ms of simulated time), "
+           "median interval %.1f ms\n",
+           n, elapsed, sim, med);
+    /* The count follows simulated time (which a loaded machine may let
+     * fall behind the wall); the pacing, the wall: the median interval. */
+    CHECK(count_ok(n, sim / 20.0));
     CHECK(med >= 20 * 0.7 && med <= 20 * 1.3);
     CHECK_EQ(s.link.seen[WSG_CMD_GET_SYSTEM_STATE] +
                  s.link.seen[WSG_CMD_GET_SPEED],
@@ -358,6 +372,8 @@ static void test_several(struct emu *e)
         CHECK(EMU_T_MS(&f) - t0 < emu_ms(250));
         check_value_frame(&f);
     }
+    long long sim0 = sim_us();
+
     for (unsigned i = 0; i < NSTREAMS; i++)
         before[i] = s.link.seen[stream_ids[i]];
     double start = emu_now_ms();
@@ -404,12 +420,19 @@ static void test_several(struct emu *e)
             CHECK_NEAR(wsg_get_f32(EMU_PARAMS(&f)), 0.0, 0.05);
     }
     REQUIRE(emu_sync(&s, EMU_REPLY_MS) == 0);
-    double elapsed = emu_now_ms() - start;
+    /* Counted against simulated time, which streams run in: on a loaded
+     * machine the daemon may drop real time it could not keep up with
+     * (overruns), and the packets follow simulated time, not the wall. */
+    double elapsed = (double)(sim_us() - sim0) / 1000.0;
     for (unsigned i = 0; i < NSTREAMS; i++) {
         unsigned got = s.link.seen[stream_ids[i]] - before[i];
-        printf("%02Xh @%u ms: %u packets in %.0f ms\n",
+        double want = elapsed / periods[i];
+
+        printf("%02Xh @%u ms: %u packets in %.0f ms of simulated time\n",
                (unsigned)stream_ids[i], (unsigned)periods[i], got, elapsed);
-        CHECK(count_ok(got, elapsed / periods[i]));
+        /* Within one packet either way of the count, plus the few that
+         * were on the way around the two readings of the time. */
+        CHECK(got + 2 >= want && got <= want + 2);
     }
     emu_drop_kept(&s);
 
