@@ -129,10 +129,10 @@ ctl() {
 # talk WSGCTL PORT: info, home, width: a fresh gripper, homed, opens to its
 # full stroke (110 mm for the default WSG 50).
 talk() {
-    check "wsgctl info: a WSG 50 with firmware 2.2.0"
+    check "wsgctl info: a WSG 50 with firmware (swrev) 2.2.0"
     ctl "$1" "$2" info
-    grep -q '^firmware 2\.2\.0$' "$S/ctl.out" ||
-        { show "$S/ctl.out"; fail "wsgctl info does not show firmware 2.2.0"; }
+    grep -q '^swrev 2\.2\.0$' "$S/ctl.out" ||
+        { show "$S/ctl.out"; fail "wsgctl info does not show swrev 2.2.0"; }
     check "wsgctl home: E_SUCCESS"
     ctl "$1" "$2" home
     check "wsgctl -q width after homing: 110.00"
