@@ -184,8 +184,10 @@ static void read_input(struct wsg_pty *pty, int closing)
     }
 }
 
-/* Is the slave closed by everyone? A master whose poll fails counts as
- * closed: IN_OPEN will tell when that changes. */
+/* Is the slave closed by everyone? With no events asked for, poll reports
+ * only POLLHUP (and errors): 1 with it while closed, 0 while a host has the
+ * port open. A master whose poll fails counts as closed: IN_OPEN will tell
+ * when that changes. */
 static int master_hung_up(const struct wsg_pty *pty)
 {
     struct pollfd p;
@@ -197,7 +199,8 @@ static int master_hung_up(const struct wsg_pty *pty)
     do
         r = poll(&p, 1, 0);
     while (r < 0 && errno == EINTR);
-    return r != 1 || (p.revents & (POLLHUP | POLLERR | POLLNVAL)) != 0;
+    return r < 0 ||
+           (r == 1 && (p.revents & (POLLHUP | POLLERR | POLLNVAL)) != 0);
 }
 
 /* Throw away what the host did not read before it closed the port: the
