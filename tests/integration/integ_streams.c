@@ -179,7 +179,8 @@ static void test_period(struct emu *e)
     /* The count follows simulated time (which a loaded machine may let
      * fall behind the wall); the pacing, the wall: the median interval. */
     CHECK(count_ok(n, sim / 20.0));
-    CHECK(med >= 20 * 0.7 && med <= 20 * 1.3);
+    if (emu_time_scale() == 1.0)
+        CHECK(med >= 20 * 0.7 && med <= 20 * 1.3);
     CHECK_EQ(s.link.seen[WSG_CMD_GET_SYSTEM_STATE] +
                  s.link.seen[WSG_CMD_GET_SPEED],
              0);
@@ -321,7 +322,12 @@ static void test_change_only(struct emu *e)
             iv[i - 1] = tw[i] - tw[i - 1];
         double med = median(iv, nw - 1);
         printf("  width median interval %.1f ms\n", med);
-        CHECK(med >= PERIOD * 0.7);
+        /* Spacing on the wall is the daemon's pacing, asserted where the
+         * machine is not declared slower: a daemon under valgrind that
+         * falls behind catches up in bursts, and packets a period apart in
+         * simulated time arrive together. */
+        if (emu_time_scale() == 1.0)
+            CHECK(med >= PERIOD * 0.7);
     }
     CHECK(nspeed >= 2); /* it rose and fell */
     /* Flags: MOVING came and went; grasp state: positioning, then idle. */
