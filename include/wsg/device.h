@@ -97,6 +97,18 @@ struct wsg_device {
                   size_t len);
     void *delay_ctx;
     struct wsg_session *streaming; /* sessions with nstreams > 0 */
+    /* Command IDs registered by a script on the gripper (a bit per ID):
+     * their packets go to user_cmd instead of the command table, and the
+     * script answers them with wsg_device_send. NULL: no script host. */
+    uint8_t user_ids[32];
+    void (*user_cmd)(void *ctx, struct wsg_session *s,
+                     const struct wsg_frame *f);
+    void *user_ctx;
+    /* Flags the gripper's owner adds to the model's: D19
+     * SF_SCRIPT_RUNNING and D20 SF_SCRIPT_FAILURE, from the script host.
+     * A power cycle (wsg_device_reset) keeps them: the script runs on. */
+    uint32_t ext_flags;
+    uint32_t last_tag; /* the session that sent the last packet; 0: none */
 };
 
 void wsg_device_init(struct wsg_device *d, const struct wsg_axis_config *cfg);
@@ -143,6 +155,29 @@ void wsg_device_input_datagram(struct wsg_device *d, struct wsg_session *s,
  * handler) and send its reply. */
 void wsg_device_dispatch(struct wsg_device *d, struct wsg_session *s,
                          const struct wsg_frame *f);
+
+/* The system state flags as 40h reports them: the model's, the last
+ * command's failure (D12) and the owner's (ext_flags). */
+uint32_t wsg_device_flags(const struct wsg_device *d);
+/* Whether a motion may start now, as the dispatcher checks a motion
+ * command: E_ACCESS_DENIED in FAST STOP or with a fault that blocks
+ * movement, E_NOT_INITIALIZED when needs_homing and not referenced, else
+ * E_SUCCESS. */
+uint16_t wsg_device_motion_check(const struct wsg_device *d, int needs_homing);
+
+/* Hand packets with this ID to user_cmd (on) or to the command table
+ * again (off). Returns 0, or -EEXIST for an ID the command table answers:
+ * a script cannot take over a built-in command. */
+int wsg_device_register(struct wsg_device *d, uint8_t id, int on);
+int wsg_device_registered(const struct wsg_device *d, uint8_t id);
+/* Forget every registered ID (the script ended). */
+void wsg_device_unregister_all(struct wsg_device *d);
+/* The session with this tag, NULL when it is gone (or tag is 0). */
+struct wsg_session *wsg_device_session(struct wsg_device *d, uint32_t tag);
+/* Send one packet the caller built whole (a script's), through the output
+ * hook like any reply. */
+void wsg_device_send(struct wsg_device *d, struct wsg_session *s,
+                     const uint8_t *pkt, size_t len);
 
 /* One model step; final results leave through lookup/send. */
 void wsg_device_step(struct wsg_device *d);

@@ -13,6 +13,7 @@
  * one is set, which transmits it later. Either way the log sees a packet
  * when it goes on the wire, not when it was made.
  */
+#include <errno.h>
 #include <math.h>
 #include <string.h>
 
@@ -33,8 +34,13 @@ static void wsg_device_done(void *ctx, uint32_t tag, uint8_t cmd_id,
                             uint16_t status)
 {
     struct wsg_device *d = ctx;
-    struct wsg_session *s = d->lookup ? d->lookup(d->lookup_ctx, tag) : NULL;
+    struct wsg_session *s;
 
+    /* Tag 0: a script's motion; it watches the model, no packet is owed
+     * and no command of a host failed. */
+    if (tag == 0)
+        return;
+    s = wsg_device_session(d, tag);
     if (s)
         wsg_device_reply(d, s, cmd_id, status, NULL, 0);
     else
@@ -122,6 +128,52 @@ void wsg_device_transmit(struct wsg_device *d, struct wsg_session *s,
     s->send(s, pkt, len);
 }
 
+struct wsg_session *wsg_device_session(struct wsg_device *d, uint32_t tag)
+{
+    return tag && d->lookup ? d->lookup(d->lookup_ctx, tag) : NULL;
+}
+
+uint32_t wsg_device_flags(const struct wsg_device *d)
+{
+    return wsg_axis_flags(wsg_device_axis_const(d)) | d->ext_flags |
+           (d->cmd_failure ? WSG_SF_CMD_FAILURE : 0u);
+}
+
+uint16_t wsg_device_motion_check(const struct wsg_device *d, int needs_homing)
+{
+    const struct wsg_axis *ax = wsg_device_axis_const(d);
+
+    if (wsg_axis_fast_stopped(ax))
+        return WSG_E_ACCESS_DENIED;
+    /* Appendix B: a fault disables all movement-related commands. */
+    if (wsg_axis_faults(ax) & WSG_FAULTS_BLOCKING)
+        return WSG_E_ACCESS_DENIED;
+    if (needs_homing && !wsg_axis_referenced(ax))
+        return WSG_E_NOT_INITIALIZED;
+    return WSG_E_SUCCESS;
+}
+
+int wsg_device_register(struct wsg_device *d, uint8_t id, int on)
+{
+    if (wsg_cmd_table[id].handler)
+        return -EEXIST;
+    if (on)
+        d->user_ids[id >> 3] |= (uint8_t)(1u << (id & 7u));
+    else
+        d->user_ids[id >> 3] &= (uint8_t) ~(1u << (id & 7u));
+    return 0;
+}
+
+int wsg_device_registered(const struct wsg_device *d, uint8_t id)
+{
+    return (d->user_ids[id >> 3] >> (id & 7u)) & 1u;
+}
+
+void wsg_device_unregister_all(struct wsg_device *d)
+{
+    memset(d->user_ids, 0, sizeof d->user_ids);
+}
+
 /* A packet is due: to the hook if there is one, else on the wire. */
 static void wsg_device_emit(struct wsg_device *d, struct wsg_session *s,
                             const uint8_t *pkt, size_t len)
@@ -130,6 +182,12 @@ static void wsg_device_emit(struct wsg_device *d, struct wsg_session *s,
         d->delay(d->delay_ctx, s, pkt, len);
     else
         wsg_device_transmit(d, s, pkt, len);
+}
+
+void wsg_device_send(struct wsg_device *d, struct wsg_session *s,
+                     const uint8_t *pkt, size_t len)
+{
+    wsg_device_emit(d, s, pkt, len);
 }
 
 void wsg_device_reply(struct wsg_device *d, struct wsg_session *s, uint8_t id,
@@ -194,7 +252,7 @@ size_t wsg_stream_value(const struct wsg_device *d, enum wsg_stream_id sid,
 
     switch (sid) {
     case WSG_STREAM_SYSTEM_STATE:
-        flags = wsg_axis_flags(ax) | (d->cmd_failure ? WSG_SF_CMD_FAILURE : 0);
+        flags = wsg_device_flags(d);
         wsg_put_u32(out, flags);
         *value = (float)flags; /* exact: the flags stay below 2^24 */
         return 4;

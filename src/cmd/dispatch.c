@@ -11,7 +11,7 @@ static uint16_t wsg_cmd_check(const struct wsg_device *d,
                               const struct wsg_cmd_desc *c,
                               const struct wsg_frame *f)
 {
-    const struct wsg_axis *ax = wsg_device_axis_const(d);
+    uint16_t st;
 
     if (s->announced)
         return WSG_E_ACCESS_DENIED; /* 3.1.2: waiting for the close */
@@ -21,15 +21,14 @@ static uint16_t wsg_cmd_check(const struct wsg_device *d,
         return (c->flags & WSG_CMDF_NO_PARAM) ? WSG_E_NO_PARAM_EXPECTED
                                               : WSG_E_CMD_FORMAT_ERROR;
     if (c->flags & WSG_CMDF_MOTION) {
-        if (wsg_axis_fast_stopped(ax))
-            return WSG_E_ACCESS_DENIED;
-        /* Appendix B: a fault disables all movement-related commands. */
-        if (wsg_axis_faults(ax) & WSG_FAULTS_BLOCKING)
-            return WSG_E_ACCESS_DENIED;
-    }
-    if ((c->flags & WSG_CMDF_HOMED) && !wsg_axis_referenced(ax))
+        st = wsg_device_motion_check(d, c->flags & WSG_CMDF_HOMED);
+        if (st != WSG_E_SUCCESS)
+            return st;
+    } else if ((c->flags & WSG_CMDF_HOMED) &&
+               !wsg_axis_referenced(wsg_device_axis_const(d))) {
         return WSG_E_NOT_INITIALIZED;
-    if ((c->flags & WSG_CMDF_ASYNC) && wsg_axis_busy(ax))
+    }
+    if ((c->flags & WSG_CMDF_ASYNC) && wsg_axis_busy(wsg_device_axis_const(d)))
         return WSG_E_ALREADY_RUNNING;
     return WSG_E_SUCCESS;
 }
@@ -41,6 +40,13 @@ void wsg_device_dispatch(struct wsg_device *d, struct wsg_session *s,
     struct wsg_reply r;
     uint16_t st;
 
+    d->last_tag = s->tag;
+    /* A script's own command: the script answers it, when it reads it. */
+    if (d->user_cmd && !s->announced && wsg_device_registered(d, f->id)) {
+        d->user_cmd(d->user_ctx, s, f);
+        wsg_axis_settle(wsg_device_axis(d));
+        return;
+    }
     r.len = 0;
     st = wsg_cmd_check(d, s, c, f);
     if (st == WSG_E_SUCCESS)

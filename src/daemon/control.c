@@ -328,8 +328,7 @@ static void cmd_state(struct ctl_ctx *c, int argc, char **argv)
     const struct wsg_device *d = &g->dev;
     const struct wsg_axis *ax = wsg_device_axis_const(d);
     const struct wsg_sched *l = c->ctl->sched;
-    uint32_t flags =
-        wsg_axis_flags(ax) | (d->cmd_failure ? WSG_SF_CMD_FAILURE : 0u);
+    uint32_t flags = wsg_device_flags(d);
     unsigned gs = (unsigned)wsg_axis_grasp_state(ax);
     struct wsg_grasp_stats stats = wsg_axis_stats(ax);
     char buf[WSG_CTL_REPLY_MAX - 8];
