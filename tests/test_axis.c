@@ -31,6 +31,48 @@ static double timed_move(struct tdev *t, float width, float speed)
     return (double)k * tdev_axis(t)->cfg.step_us * 1e-6;
 }
 
+/* A model on its own, as a script host drives it: requests and settles
+ * directly, final results recorded here. */
+struct rec {
+    int n;
+    uint32_t tag[16];
+    uint8_t id[16];
+    uint16_t status[16];
+};
+
+static void rec_done(void *ctx, uint32_t tag, uint8_t cmd_id, uint16_t status)
+{
+    struct rec *r = ctx;
+
+    REQUIRE(r->n < 16);
+    r->tag[r->n] = tag;
+    r->id[r->n] = cmd_id;
+    r->status[r->n] = status;
+    r->n++;
+}
+
+/* A WSG 50 homed open, its results going to r. */
+static void bare_init(struct wsg_axis *ax, struct rec *r)
+{
+    struct wsg_axis_config cfg;
+
+    REQUIRE(wsg_axis_config_init(&cfg, "wsg50") == 0);
+    memset(r, 0, sizeof *r);
+    wsg_axis_init(ax, &cfg, rec_done, r);
+    REQUIRE(wsg_axis_request_homing(ax, WSG_HOME_POSITIVE, 9) ==
+            WSG_E_CMD_PENDING);
+    while (r->n == 0 && ax->time_us < 10000000u)
+        wsg_axis_step(ax);
+    REQUIRE(r->n == 1 && r->status[0] == WSG_E_SUCCESS);
+    r->n = 0;
+}
+
+static void bare_steps(struct wsg_axis *ax, long n)
+{
+    while (n-- > 0)
+        wsg_axis_step(ax);
+}
+
 static void test_durations(void)
 {
     struct tdev t;
@@ -740,6 +782,44 @@ static void test_world_at_once(void)
     CHECK_NEAR(tdev_axis(&t)->width, 40.0 - 40.0 / 50.0, 1e-9);
 }
 
+/* A motion started over a running one (a script's mc.move over its own
+ * movement) gives the old one's owner its final E_CMD_ABORTED. */
+static void test_replace_aborts(void)
+{
+    struct wsg_axis ax;
+    struct rec r;
+
+    bare_init(&ax, &r);
+    CHECK_EQ(wsg_axis_request_move(&ax, 0, 10.0, 50.0, 1), WSG_E_CMD_PENDING);
+    wsg_axis_settle(&ax);
+    bare_steps(&ax, 300);
+    CHECK_EQ(r.n, 0);
+    CHECK_EQ(wsg_axis_request_move(&ax, 0, 90.0, 50.0, 2), WSG_E_CMD_PENDING);
+    wsg_axis_settle(&ax);
+    REQUIRE(r.n == 1);
+    CHECK_EQ(r.tag[0], 1);
+    CHECK_EQ(r.id[0], WSG_CMD_PREPOSITION);
+    CHECK_EQ(r.status[0], WSG_E_CMD_ABORTED);
+    /* the new one runs to its end and reports once */
+    bare_steps(&ax, 4000);
+    REQUIRE(r.n == 2);
+    CHECK_EQ(r.tag[1], 2);
+    CHECK_EQ(r.status[1], WSG_E_SUCCESS);
+    CHECK_NEAR(ax.width, 90.0, 1e-9);
+
+    /* a grasp replaced by a homing: the grasp's owner hears it */
+    CHECK_EQ(wsg_axis_request_grasp(&ax, 20.0, 50.0, 3), WSG_E_CMD_PENDING);
+    wsg_axis_settle(&ax);
+    bare_steps(&ax, 10);
+    CHECK_EQ(wsg_axis_request_homing(&ax, WSG_HOME_POSITIVE, 4),
+             WSG_E_CMD_PENDING);
+    wsg_axis_settle(&ax);
+    REQUIRE(r.n == 3);
+    CHECK_EQ(r.tag[2], 3);
+    CHECK_EQ(r.id[2], WSG_CMD_GRASP);
+    CHECK_EQ(r.status[2], WSG_E_CMD_ABORTED);
+}
+
 /* The model's ranges, as the daemon's options check their settings and the
  * session commands clamp into them. */
 static void test_config_ranges(void)
@@ -840,5 +920,6 @@ int main(void)
     test_soft_limits_inside();
     test_grasp_end_stop();
     test_world_at_once();
+    test_replace_aborts();
     TEST_EXIT();
 }

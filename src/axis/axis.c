@@ -393,6 +393,10 @@ static void wsg_axis_start(struct wsg_axis *ax, const struct wsg_motion *m)
 {
     int decel = m->kind != WSG_MOTION_HOMING;
 
+    /* A motion that replaces a running one (a script's mc.move over its
+     * own movement; the dispatcher refuses that with E_ALREADY_RUNNING)
+     * must not drop the old one's owner without its final result. */
+    wsg_axis_done(ax, &ax->motion, WSG_E_CMD_ABORTED);
     ax->motion = *m;
     wsg_profile_init(&ax->motion.prof, ax->width, m->target, m->speed, ax->acc,
                      decel);
