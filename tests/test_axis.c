@@ -820,6 +820,73 @@ static void test_replace_aborts(void)
     CHECK_EQ(r.status[2], WSG_E_CMD_ABORTED);
 }
 
+/* Runs a bare model until its next final result; returns the status. */
+static uint16_t bare_final(struct wsg_axis *ax, struct rec *r, long max)
+{
+    int n = r->n;
+
+    while (r->n == n && max-- > 0)
+        wsg_axis_step(ax);
+    REQUIRE(r->n == n + 1);
+    return r->status[n];
+}
+
+/* A grasp with its own window: the clamping travel sets where it stops
+ * with no part, the tolerance what block holds; below 0 and NULL are the
+ * configuration's (10 mm each). */
+static void test_grasp_window(void)
+{
+    struct wsg_axis ax;
+    struct rec r;
+    struct wsg_grasp_window w = {3.0, -1.0};
+
+    bare_init(&ax, &r);
+    /* no part: through 3 mm of travel, not 10 */
+    CHECK_EQ(wsg_axis_request_grasp_in(&ax, 40.0, 100.0, &w, 1),
+             WSG_E_CMD_PENDING);
+    CHECK_EQ(bare_final(&ax, &r, 4000), WSG_E_CMD_FAILED);
+    CHECK_NEAR(ax.width, 37.0, 1e-9);
+    /* the configuration's travel with NULL and with a value below 0 */
+    CHECK_EQ(wsg_axis_request_move(&ax, 0, 60.0, 400.0, 1), WSG_E_CMD_PENDING);
+    CHECK_EQ(bare_final(&ax, &r, 4000), WSG_E_SUCCESS);
+    CHECK_EQ(wsg_axis_request_grasp_in(&ax, 40.0, 100.0, NULL, 1),
+             WSG_E_CMD_PENDING);
+    CHECK_EQ(bare_final(&ax, &r, 4000), WSG_E_CMD_FAILED);
+    CHECK_NEAR(ax.width, 30.0, 1e-9);
+    w.travel = -1.0;
+    CHECK_EQ(wsg_axis_request_grasp_in(&ax, 25.0, 100.0, &w, 1),
+             WSG_E_CMD_PENDING);
+    CHECK_EQ(bare_final(&ax, &r, 4000), WSG_E_CMD_FAILED);
+    CHECK_NEAR(ax.width, 15.0, 1e-9);
+
+    /* a part of 80 mm blocks at 79.2: within 10 mm of 75, not within 2 */
+    CHECK_EQ(wsg_axis_request_move(&ax, 0, 100.0, 400.0, 1),
+             WSG_E_CMD_PENDING);
+    CHECK_EQ(bare_final(&ax, &r, 4000), WSG_E_SUCCESS);
+    wsg_axis_set_part(&ax, 80.0, 0);
+    w.tolerance = 2.0;
+    CHECK_EQ(wsg_axis_request_grasp_in(&ax, 75.0, 100.0, &w, 1),
+             WSG_E_CMD_PENDING);
+    CHECK_EQ(bare_final(&ax, &r, 4000), WSG_E_CMD_FAILED);
+    CHECK_EQ(ax.grasp_state, WSG_GS_NO_PART);
+    CHECK_NEAR(ax.width, 80.0 - 40.0 / 50.0, 1e-9);
+    w.tolerance = -1.0;
+    CHECK_EQ(wsg_axis_request_grasp_in(&ax, 75.0, 100.0, &w, 1),
+             WSG_E_CMD_PENDING);
+    CHECK_EQ(bare_final(&ax, &r, 4000), WSG_E_SUCCESS);
+    CHECK_EQ(ax.grasp_state, WSG_GS_HOLDING);
+
+    /* NaN is refused, nothing recorded */
+    w.travel = NAN;
+    CHECK_EQ(wsg_axis_request_grasp_in(&ax, 75.0, 100.0, &w, 1),
+             WSG_E_INVALID_PARAMETER);
+    w.travel = 1.0;
+    w.tolerance = NAN;
+    CHECK_EQ(wsg_axis_request_grasp_in(&ax, 75.0, 100.0, &w, 1),
+             WSG_E_INVALID_PARAMETER);
+    CHECK_EQ(ax.req_motion.kind, WSG_MOTION_NONE);
+}
+
 /* The model's ranges, as the daemon's options check their settings and the
  * session commands clamp into them. */
 static void test_config_ranges(void)
@@ -921,5 +988,6 @@ int main(void)
     test_grasp_end_stop();
     test_world_at_once();
     test_replace_aborts();
+    test_grasp_window();
     TEST_EXIT();
 }

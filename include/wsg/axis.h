@@ -193,6 +193,21 @@ uint16_t wsg_axis_request_move(struct wsg_axis *ax, uint8_t flags,
                                double width, double speed, uint32_t tag);
 uint16_t wsg_axis_request_grasp(struct wsg_axis *ax, double width,
                                 double speed, uint32_t tag);
+/* The grasping window one grasp is judged by (NOTES.md): the clamping
+ * travel beyond the nominal width and the part width tolerance, in mm. A
+ * value below 0 takes the configuration's (clamp_travel,
+ * width_tolerance); others are clamped to 0..stroke. */
+struct wsg_grasp_window {
+    double travel;
+    double tolerance;
+};
+/* A grasp with its own window (a script's grasping.clamp, a connection's
+ * own settings); w NULL is wsg_axis_request_grasp. NaN in w is
+ * E_INVALID_PARAMETER. */
+uint16_t wsg_axis_request_grasp_in(struct wsg_axis *ax, double width,
+                                   double speed,
+                                   const struct wsg_grasp_window *w,
+                                   uint32_t tag);
 uint16_t wsg_axis_request_release(struct wsg_axis *ax, double width,
                                   double speed, uint32_t tag);
 void wsg_axis_request_stop(struct wsg_axis *ax);

@@ -487,8 +487,8 @@ static void wsg_axis_blocked(struct wsg_axis *ax)
         break;
     case WSG_MOTION_GRASP:
         ax->stats.total++;
-        if (dir < 0 ? ax->width <= m.nominal + ax->cfg.width_tolerance
-                    : ax->width >= m.nominal - ax->cfg.width_tolerance) {
+        if (dir < 0 ? ax->width <= m.nominal + m.tolerance
+                    : ax->width >= m.nominal - m.tolerance) {
             ax->grasp_state = WSG_GS_HOLDING;
             ax->event_flags |= WSG_SF_TARGET_POS_REACHED;
             wsg_axis_clamp(ax, f, m.target, m.speed, dir);
@@ -989,27 +989,55 @@ uint16_t wsg_axis_request_move(struct wsg_axis *ax, uint8_t flags,
     return st;
 }
 
-uint16_t wsg_axis_request_grasp(struct wsg_axis *ax, double width,
-                                double speed, uint32_t tag)
+/* A window value: below 0 the configuration's, else clamped into the
+ * range the configuration's own takes (wsg_axis_config_range). */
+static double wsg_axis_window_value(const struct wsg_axis *ax, double v,
+                                    enum wsg_axis_setting s, double cfg_value)
 {
-    double target;
+    struct wsg_axis_range r = wsg_axis_config_range(&ax->cfg, s);
+
+    return v < 0 ? cfg_value : wsg_clamp(v, r.min, r.max);
+}
+
+uint16_t wsg_axis_request_grasp_in(struct wsg_axis *ax, double width,
+                                   double speed,
+                                   const struct wsg_grasp_window *w,
+                                   uint32_t tag)
+{
+    double target, travel = ax->cfg.clamp_travel;
+    double tolerance = ax->cfg.width_tolerance;
     uint16_t st;
 
     if (isnan(width) || isnan(speed))
         return WSG_E_INVALID_PARAMETER;
+    if (w) {
+        if (isnan(w->travel) || isnan(w->tolerance))
+            return WSG_E_INVALID_PARAMETER;
+        travel = wsg_axis_window_value(ax, w->travel, WSG_AXIS_CLAMP_TRAVEL,
+                                       travel);
+        tolerance = wsg_axis_window_value(ax, w->tolerance,
+                                          WSG_AXIS_WIDTH_TOLERANCE, tolerance);
+    }
     width = wsg_axis_clamp_width(ax, width);
     if (wsg_axis_outside_soft_limits(ax, width))
         return WSG_E_RANGE_ERROR;
     speed = wsg_clamp(speed, ax->cfg.min_speed, ax->cfg.max_speed);
     /* Close onto a part narrower than the fingers, open into a part around
      * them, in both cases through the clamping travel beyond it. */
-    target = width <= ax->width ? width - ax->cfg.clamp_travel
-                                : width + ax->cfg.clamp_travel;
+    target = width <= ax->width ? width - travel : width + travel;
     target = wsg_axis_clamp_width(ax, target);
     st = wsg_axis_request(ax, WSG_MOTION_GRASP, WSG_CMD_GRASP, target, speed,
                           tag);
     ax->req_motion.nominal = width;
+    /* Kept with the motion: the window is judged when it blocks. */
+    ax->req_motion.tolerance = tolerance;
     return st;
+}
+
+uint16_t wsg_axis_request_grasp(struct wsg_axis *ax, double width,
+                                double speed, uint32_t tag)
+{
+    return wsg_axis_request_grasp_in(ax, width, speed, NULL, tag);
 }
 
 uint16_t wsg_axis_request_release(struct wsg_axis *ax, double width,

@@ -34,8 +34,9 @@ struct wsg_motion {
     enum wsg_motion_kind kind;
     uint8_t cmd_id;
     uint32_t tag;
-    double target;  /* where the profile ends */
-    double nominal; /* grasp: the part's nominal width; homing: +1/-1 */
+    double target;    /* where the profile ends */
+    double nominal;   /* grasp: the part's nominal width; homing: +1/-1 */
+    double tolerance; /* grasp: the part width tolerance it is judged by */
     double speed;
     uint8_t move_flags; /* preposition flags */
     struct wsg_profile prof;
