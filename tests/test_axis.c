@@ -887,6 +887,48 @@ static void test_grasp_window(void)
     CHECK_EQ(ax.req_motion.kind, WSG_MOTION_NONE);
 }
 
+/* Pressing: held by a block with the drive pushing (a clamp), not after
+ * stop on block, a Stop, or a block that went; the BLOCKED flag is not it
+ * (a blocked motion leaves it set). */
+static void test_pressing(void)
+{
+    struct wsg_axis ax;
+    struct rec r;
+
+    bare_init(&ax, &r);
+    CHECK_EQ(wsg_axis_pressing(&ax), 0);
+    wsg_axis_set_part(&ax, 40.0, 0);
+    CHECK_EQ(wsg_axis_request_grasp(&ax, 40.0, 100.0, 1), WSG_E_CMD_PENDING);
+    wsg_axis_settle(&ax);
+    bare_steps(&ax, 10);
+    CHECK_EQ(wsg_axis_pressing(&ax), 0); /* on its way */
+    CHECK_EQ(bare_final(&ax, &r, 4000), WSG_E_SUCCESS);
+    CHECK_EQ(wsg_axis_pressing(&ax), 1);
+    /* the part goes: lost, the fingers snap on, nothing pushes */
+    wsg_axis_set_part(&ax, -1.0, 0);
+    wsg_axis_settle(&ax);
+    CHECK_EQ(wsg_axis_pressing(&ax), 0);
+    bare_steps(&ax, 2000);
+    CHECK_EQ(wsg_axis_pressing(&ax), 0);
+
+    /* a preposition clamped on an obstacle presses until a Stop */
+    wsg_axis_set_obstacle(&ax, 60.0);
+    CHECK_EQ(wsg_axis_request_move(&ax, 0, 90.0, 100.0, 1), WSG_E_CMD_PENDING);
+    CHECK_EQ(bare_final(&ax, &r, 4000), WSG_E_AXIS_BLOCKED);
+    CHECK_EQ(wsg_axis_pressing(&ax), 1);
+    wsg_axis_request_stop(&ax);
+    wsg_axis_settle(&ax);
+    CHECK_EQ(wsg_axis_pressing(&ax), 0);
+    CHECK(wsg_axis_flags(&ax) & WSG_SF_BLOCKED_PLUS);
+    /* stop on block: blocked, flagged, not pressing */
+    CHECK_EQ(
+        wsg_axis_request_move(&ax, WSG_MOVE_STOP_ON_BLOCK, 20.0, 100.0, 1),
+        WSG_E_CMD_PENDING);
+    CHECK_EQ(bare_final(&ax, &r, 4000), WSG_E_AXIS_BLOCKED);
+    CHECK(wsg_axis_flags(&ax) & WSG_SF_BLOCKED_MINUS);
+    CHECK_EQ(wsg_axis_pressing(&ax), 0);
+}
+
 /* The model's ranges, as the daemon's options check their settings and the
  * session commands clamp into them. */
 static void test_config_ranges(void)
@@ -989,5 +1031,6 @@ int main(void)
     test_world_at_once();
     test_replace_aborts();
     test_grasp_window();
+    test_pressing();
     TEST_EXIT();
 }

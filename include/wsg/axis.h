@@ -174,6 +174,13 @@ struct wsg_grasp_stats wsg_axis_stats(const struct wsg_axis *ax);
 uint32_t wsg_axis_faults(const struct wsg_axis *ax);
 /* Homed: the commands that need a reference may run. */
 int wsg_axis_referenced(const struct wsg_axis *ax);
+/* The fingers are held by a block with the drive pushing into it: a clamp
+ * (a grasp holding, a preposition blocked without stop on block). The
+ * physical state a script's mc.blocked() reads: unlike the BLOCKED flags
+ * of 40h, which a blocked motion leaves set until the next one starts, it
+ * is 0 once the drive no longer pushes (stop on block, Stop, a part lost
+ * and the fingers snapping on). */
+int wsg_axis_pressing(const struct wsg_axis *ax);
 /* Session settings. */
 double wsg_axis_acc(const struct wsg_axis *ax);
 double wsg_axis_force_limit(const struct wsg_axis *ax);

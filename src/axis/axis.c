@@ -903,6 +903,11 @@ int wsg_axis_referenced(const struct wsg_axis *ax)
     return ax->referenced;
 }
 
+int wsg_axis_pressing(const struct wsg_axis *ax)
+{
+    return ax->clamping;
+}
+
 double wsg_axis_acc(const struct wsg_axis *ax)
 {
     return ax->acc;
