@@ -3,7 +3,9 @@
  * trapezoid computed here independently, homing, grasping a part (held, no
  * part, part lost, force build-up), clamp and stop on block, soft limits,
  * FAST STOP, overdrive, and the system state flags at every stage; the
- * model's ranges of the values it takes (config settings, widths).
+ * model's ranges of the values it takes (config settings, widths); what
+ * scripts drive directly: speed mode, motions replacing running ones,
+ * pressing, a grasp's own window.
  */
 #include <errno.h>
 
