@@ -3,7 +3,9 @@
  * trapezoid computed here independently, homing, grasping a part (held, no
  * part, part lost, force build-up), clamp and stop on block, soft limits,
  * FAST STOP, overdrive, and the system state flags at every stage; the
- * model's ranges of the values it takes (config settings, widths).
+ * model's ranges of the values it takes (config settings, widths); what
+ * scripts drive directly: speed mode, motions replacing running ones,
+ * pressing, a grasp's own window.
  */
 #include <errno.h>
 
@@ -29,6 +31,48 @@ static double timed_move(struct tdev *t, float width, float speed)
     REQUIRE(k > 0);
     CHECK_EQ(tdev_last(t)->status, WSG_E_SUCCESS);
     return (double)k * tdev_axis(t)->cfg.step_us * 1e-6;
+}
+
+/* A model on its own, as a script host drives it: requests and settles
+ * directly, final results recorded here. */
+struct rec {
+    int n;
+    uint32_t tag[16];
+    uint8_t id[16];
+    uint16_t status[16];
+};
+
+static void rec_done(void *ctx, uint32_t tag, uint8_t cmd_id, uint16_t status)
+{
+    struct rec *r = ctx;
+
+    REQUIRE(r->n < 16);
+    r->tag[r->n] = tag;
+    r->id[r->n] = cmd_id;
+    r->status[r->n] = status;
+    r->n++;
+}
+
+/* A WSG 50 homed open, its results going to r. */
+static void bare_init(struct wsg_axis *ax, struct rec *r)
+{
+    struct wsg_axis_config cfg;
+
+    REQUIRE(wsg_axis_config_init(&cfg, "wsg50") == 0);
+    memset(r, 0, sizeof *r);
+    wsg_axis_init(ax, &cfg, rec_done, r);
+    REQUIRE(wsg_axis_request_homing(ax, WSG_HOME_POSITIVE, 9) ==
+            WSG_E_CMD_PENDING);
+    while (r->n == 0 && ax->time_us < 10000000u)
+        wsg_axis_step(ax);
+    REQUIRE(r->n == 1 && r->status[0] == WSG_E_SUCCESS);
+    r->n = 0;
+}
+
+static void bare_steps(struct wsg_axis *ax, long n)
+{
+    while (n-- > 0)
+        wsg_axis_step(ax);
 }
 
 static void test_durations(void)
@@ -740,6 +784,544 @@ static void test_world_at_once(void)
     CHECK_NEAR(tdev_axis(&t)->width, 40.0 - 40.0 / 50.0, 1e-9);
 }
 
+/* A motion started over a running one (a script's mc.move over its own
+ * movement) gives the old one's owner its final E_CMD_ABORTED. */
+static void test_replace_aborts(void)
+{
+    struct wsg_axis ax;
+    struct rec r;
+
+    bare_init(&ax, &r);
+    CHECK_EQ(wsg_axis_request_move(&ax, 0, 10.0, 50.0, 1), WSG_E_CMD_PENDING);
+    wsg_axis_settle(&ax);
+    bare_steps(&ax, 300);
+    CHECK_EQ(r.n, 0);
+    CHECK_EQ(wsg_axis_request_move(&ax, 0, 90.0, 50.0, 2), WSG_E_CMD_PENDING);
+    wsg_axis_settle(&ax);
+    REQUIRE(r.n == 1);
+    CHECK_EQ(r.tag[0], 1);
+    CHECK_EQ(r.id[0], WSG_CMD_PREPOSITION);
+    CHECK_EQ(r.status[0], WSG_E_CMD_ABORTED);
+    /* the new one runs to its end and reports once */
+    bare_steps(&ax, 4000);
+    REQUIRE(r.n == 2);
+    CHECK_EQ(r.tag[1], 2);
+    CHECK_EQ(r.status[1], WSG_E_SUCCESS);
+    CHECK_NEAR(ax.width, 90.0, 1e-9);
+
+    /* a grasp replaced by a homing: the grasp's owner hears it */
+    CHECK_EQ(wsg_axis_request_grasp(&ax, 20.0, 50.0, 3), WSG_E_CMD_PENDING);
+    wsg_axis_settle(&ax);
+    bare_steps(&ax, 10);
+    CHECK_EQ(wsg_axis_request_homing(&ax, WSG_HOME_POSITIVE, 4),
+             WSG_E_CMD_PENDING);
+    wsg_axis_settle(&ax);
+    REQUIRE(r.n == 3);
+    CHECK_EQ(r.tag[2], 3);
+    CHECK_EQ(r.id[2], WSG_CMD_GRASP);
+    CHECK_EQ(r.status[2], WSG_E_CMD_ABORTED);
+}
+
+/* Runs a bare model until its next final result; returns the status. */
+static uint16_t bare_final(struct wsg_axis *ax, struct rec *r, long max)
+{
+    int n = r->n;
+
+    while (r->n == n && max-- > 0)
+        wsg_axis_step(ax);
+    REQUIRE(r->n == n + 1);
+    return r->status[n];
+}
+
+/* A grasp with its own window: the clamping travel sets where it stops
+ * with no part, the tolerance what block holds; below 0 and NULL are the
+ * configuration's (10 mm each). */
+static void test_grasp_window(void)
+{
+    struct wsg_axis ax;
+    struct rec r;
+    struct wsg_grasp_window w = {3.0, -1.0};
+
+    bare_init(&ax, &r);
+    /* no part: through 3 mm of travel, not 10 */
+    CHECK_EQ(wsg_axis_request_grasp_in(&ax, 40.0, 100.0, &w, 1),
+             WSG_E_CMD_PENDING);
+    CHECK_EQ(bare_final(&ax, &r, 4000), WSG_E_CMD_FAILED);
+    CHECK_NEAR(ax.width, 37.0, 1e-9);
+    /* the configuration's travel with NULL and with a value below 0 */
+    CHECK_EQ(wsg_axis_request_move(&ax, 0, 60.0, 400.0, 1), WSG_E_CMD_PENDING);
+    CHECK_EQ(bare_final(&ax, &r, 4000), WSG_E_SUCCESS);
+    CHECK_EQ(wsg_axis_request_grasp_in(&ax, 40.0, 100.0, NULL, 1),
+             WSG_E_CMD_PENDING);
+    CHECK_EQ(bare_final(&ax, &r, 4000), WSG_E_CMD_FAILED);
+    CHECK_NEAR(ax.width, 30.0, 1e-9);
+    w.travel = -1.0;
+    CHECK_EQ(wsg_axis_request_grasp_in(&ax, 25.0, 100.0, &w, 1),
+             WSG_E_CMD_PENDING);
+    CHECK_EQ(bare_final(&ax, &r, 4000), WSG_E_CMD_FAILED);
+    CHECK_NEAR(ax.width, 15.0, 1e-9);
+
+    /* a part of 80 mm blocks at 79.2: within 10 mm of 75, not within 2 */
+    CHECK_EQ(wsg_axis_request_move(&ax, 0, 100.0, 400.0, 1),
+             WSG_E_CMD_PENDING);
+    CHECK_EQ(bare_final(&ax, &r, 4000), WSG_E_SUCCESS);
+    wsg_axis_set_part(&ax, 80.0, 0);
+    w.tolerance = 2.0;
+    CHECK_EQ(wsg_axis_request_grasp_in(&ax, 75.0, 100.0, &w, 1),
+             WSG_E_CMD_PENDING);
+    CHECK_EQ(bare_final(&ax, &r, 4000), WSG_E_CMD_FAILED);
+    CHECK_EQ(ax.grasp_state, WSG_GS_NO_PART);
+    CHECK_NEAR(ax.width, 80.0 - 40.0 / 50.0, 1e-9);
+    w.tolerance = -1.0;
+    CHECK_EQ(wsg_axis_request_grasp_in(&ax, 75.0, 100.0, &w, 1),
+             WSG_E_CMD_PENDING);
+    CHECK_EQ(bare_final(&ax, &r, 4000), WSG_E_SUCCESS);
+    CHECK_EQ(ax.grasp_state, WSG_GS_HOLDING);
+
+    /* NaN is refused, nothing recorded */
+    w.travel = NAN;
+    CHECK_EQ(wsg_axis_request_grasp_in(&ax, 75.0, 100.0, &w, 1),
+             WSG_E_INVALID_PARAMETER);
+    w.travel = 1.0;
+    w.tolerance = NAN;
+    CHECK_EQ(wsg_axis_request_grasp_in(&ax, 75.0, 100.0, &w, 1),
+             WSG_E_INVALID_PARAMETER);
+    CHECK_EQ(ax.req_motion.kind, WSG_MOTION_NONE);
+}
+
+/* Pressing: held by a block with the drive pushing (a clamp), not after
+ * stop on block, a Stop, or a block that went; the BLOCKED flag is not it
+ * (a blocked motion leaves it set). */
+static void test_pressing(void)
+{
+    struct wsg_axis ax;
+    struct rec r;
+
+    bare_init(&ax, &r);
+    CHECK_EQ(wsg_axis_pressing(&ax), 0);
+    wsg_axis_set_part(&ax, 40.0, 0);
+    CHECK_EQ(wsg_axis_request_grasp(&ax, 40.0, 100.0, 1), WSG_E_CMD_PENDING);
+    wsg_axis_settle(&ax);
+    bare_steps(&ax, 10);
+    CHECK_EQ(wsg_axis_pressing(&ax), 0); /* on its way */
+    CHECK_EQ(bare_final(&ax, &r, 4000), WSG_E_SUCCESS);
+    CHECK_EQ(wsg_axis_pressing(&ax), 1);
+    /* the part goes: lost, the fingers snap on, nothing pushes */
+    wsg_axis_set_part(&ax, -1.0, 0);
+    wsg_axis_settle(&ax);
+    CHECK_EQ(wsg_axis_pressing(&ax), 0);
+    bare_steps(&ax, 2000);
+    CHECK_EQ(wsg_axis_pressing(&ax), 0);
+
+    /* a preposition clamped on an obstacle presses until a Stop */
+    wsg_axis_set_obstacle(&ax, 60.0);
+    CHECK_EQ(wsg_axis_request_move(&ax, 0, 90.0, 100.0, 1), WSG_E_CMD_PENDING);
+    CHECK_EQ(bare_final(&ax, &r, 4000), WSG_E_AXIS_BLOCKED);
+    CHECK_EQ(wsg_axis_pressing(&ax), 1);
+    wsg_axis_request_stop(&ax);
+    wsg_axis_settle(&ax);
+    CHECK_EQ(wsg_axis_pressing(&ax), 0);
+    CHECK(wsg_axis_flags(&ax) & WSG_SF_BLOCKED_PLUS);
+    /* stop on block: blocked, flagged, not pressing */
+    CHECK_EQ(
+        wsg_axis_request_move(&ax, WSG_MOVE_STOP_ON_BLOCK, 20.0, 100.0, 1),
+        WSG_E_CMD_PENDING);
+    CHECK_EQ(bare_final(&ax, &r, 4000), WSG_E_AXIS_BLOCKED);
+    CHECK(wsg_axis_flags(&ax) & WSG_SF_BLOCKED_MINUS);
+    CHECK_EQ(wsg_axis_pressing(&ax), 0);
+}
+
+/* Speed mode in free motion: the velocity ramps with the model's maximum
+ * acceleration (5000 mm/s^2 on a WSG 50: 5 mm/s per 1 ms step), not the
+ * session's 150; small set speeds are kept, large ones clamped; set speed
+ * 0 stands still, and a Stop ends it. */
+static void test_speed_ramp(void)
+{
+    struct wsg_axis ax;
+    struct rec r;
+    double w;
+    int i;
+
+    bare_init(&ax, &r);
+    CHECK_EQ(wsg_axis_request_speed(&ax, NAN, 0), WSG_E_INVALID_PARAMETER);
+    CHECK_EQ(ax.req_motion.kind, WSG_MOTION_NONE);
+    CHECK_EQ(wsg_axis_request_speed(&ax, -100.0, 0), WSG_E_SUCCESS);
+    CHECK_EQ(wsg_axis_speed_mode(&ax), 0); /* not settled yet */
+    wsg_axis_settle(&ax);
+    CHECK_EQ(wsg_axis_speed_mode(&ax), 1);
+    CHECK(wsg_axis_flags(&ax) & WSG_SF_MOVING);
+    CHECK_EQ(wsg_axis_grasp_state(&ax), WSG_GS_POSITIONING);
+    CHECK(wsg_axis_busy(&ax));
+    CHECK(!wsg_axis_idle(&ax));
+    bare_steps(&ax, 1);
+    CHECK_NEAR(wsg_axis_speed(&ax), -5.0, 1e-9);
+    bare_steps(&ax, 19);
+    CHECK_NEAR(wsg_axis_speed(&ax), -100.0, 1e-9);
+    CHECK_NEAR(wsg_axis_width(&ax), 110.0 - 0.5 * 5000.0 * 0.02 * 0.02, 1e-9);
+    bare_steps(&ax, 10);
+    CHECK_NEAR(wsg_axis_width(&ax), 108.0, 1e-9);
+    CHECK_EQ(wsg_axis_force(&ax), 0.0);
+    /* a ramp that ends inside a step is exact: -100 to -97.5 in 0.5 ms */
+    CHECK_EQ(wsg_axis_request_speed(&ax, -97.5, 0), WSG_E_SUCCESS);
+    wsg_axis_settle(&ax);
+    bare_steps(&ax, 1);
+    CHECK_NEAR(wsg_axis_speed(&ax), -97.5, 1e-9);
+    CHECK_NEAR(wsg_axis_width(&ax),
+               108.0 - (0.5 * (100.0 + 97.5) * 0.0005 + 97.5 * 0.0005), 1e-9);
+    /* below the motion commands' 5 mm/s minimum: taken as it is */
+    CHECK_EQ(wsg_axis_request_speed(&ax, -0.5, 0), WSG_E_SUCCESS);
+    wsg_axis_settle(&ax);
+    bare_steps(&ax, 100);
+    CHECK_NEAR(wsg_axis_speed(&ax), -0.5, 1e-9);
+    w = wsg_axis_width(&ax);
+    bare_steps(&ax, 1000);
+    CHECK_NEAR(wsg_axis_width(&ax), w - 0.5, 1e-9);
+    /* above the maximum: clamped */
+    CHECK_EQ(wsg_axis_request_speed(&ax, -1e6, 0), WSG_E_SUCCESS);
+    wsg_axis_settle(&ax);
+    bare_steps(&ax, 100);
+    CHECK_NEAR(wsg_axis_speed(&ax), -420.0, 1e-9);
+    /* set speed 0: decelerates, then stands; nothing moving, idle, still on */
+    CHECK_EQ(wsg_axis_request_speed(&ax, 0.0, 0), WSG_E_SUCCESS);
+    wsg_axis_settle(&ax);
+    CHECK(wsg_axis_flags(&ax) & WSG_SF_MOVING);
+    for (i = 0; i < 83; i++) {
+        bare_steps(&ax, 1);
+        CHECK(!wsg_axis_idle(&ax));
+    }
+    bare_steps(&ax, 1);
+    CHECK_EQ(wsg_axis_speed(&ax), 0.0);
+    CHECK(!(wsg_axis_flags(&ax) & WSG_SF_MOVING));
+    CHECK(wsg_axis_idle(&ax));
+    CHECK_EQ(wsg_axis_speed_mode(&ax), 1);
+    CHECK(wsg_axis_busy(&ax));
+    CHECK_EQ(wsg_axis_grasp_state(&ax), WSG_GS_POSITIONING);
+    w = wsg_axis_width(&ax);
+    bare_steps(&ax, 100);
+    CHECK_EQ(wsg_axis_width(&ax), w);
+    CHECK_EQ(r.n, 0); /* nothing ended it */
+    /* a Stop ends it: stopped, idle, its final result E_CMD_ABORTED */
+    wsg_axis_request_stop(&ax);
+    wsg_axis_settle(&ax);
+    CHECK_EQ(wsg_axis_speed_mode(&ax), 0);
+    CHECK(!wsg_axis_busy(&ax));
+    CHECK(wsg_axis_flags(&ax) & WSG_SF_AXIS_STOPPED);
+    CHECK_EQ(wsg_axis_grasp_state(&ax), WSG_GS_IDLE);
+    REQUIRE(r.n == 1);
+    CHECK_EQ(r.tag[0], 0);
+    CHECK_EQ(r.id[0], 0);
+    CHECK_EQ(r.status[0], WSG_E_CMD_ABORTED);
+    /* a Stop while it moves halts the fingers at once */
+    CHECK_EQ(wsg_axis_request_speed(&ax, 50.0, 0), WSG_E_SUCCESS);
+    wsg_axis_settle(&ax);
+    bare_steps(&ax, 50);
+    w = wsg_axis_width(&ax);
+    wsg_axis_request_stop(&ax);
+    wsg_axis_settle(&ax);
+    CHECK_EQ(wsg_axis_speed(&ax), 0.0);
+    bare_steps(&ax, 10);
+    CHECK_EQ(wsg_axis_width(&ax), w);
+}
+
+/* Speed mode against a part, the end stops and an obstacle: it stops where
+ * the force limit holds it, pushes on (not ended, blocked and pressing);
+ * the same direction again changes nothing; a new force limit squeezes
+ * the part to where that force holds it; away from the contact frees the
+ * fingers; a block that goes lets them move on. */
+static void test_speed_block(void)
+{
+    struct wsg_axis ax;
+    struct rec r;
+    double prev = 0.0;
+    int rising = 1, i;
+
+    bare_init(&ax, &r);
+    wsg_axis_set_part(&ax, 40.0, 10.0);
+    CHECK_EQ(wsg_axis_request_speed(&ax, -50.0, 0), WSG_E_SUCCESS);
+    wsg_axis_settle(&ax);
+    for (i = 0; i < 3000 && wsg_axis_width(&ax) > 40.0; i++)
+        bare_steps(&ax, 1);
+    for (i = 0; i < 3000 && !wsg_axis_pressing(&ax); i++) {
+        bare_steps(&ax, 1);
+        if (wsg_axis_force(&ax) < prev)
+            rising = 0;
+        prev = wsg_axis_force(&ax);
+    }
+    CHECK(rising);
+    CHECK(i > 5); /* the force built up over several steps */
+    CHECK_EQ(wsg_axis_pressing(&ax), 1);
+    CHECK_NEAR(wsg_axis_width(&ax), 36.0, 1e-9);
+    CHECK_NEAR(wsg_axis_force(&ax), 40.0, 1e-9);
+    CHECK_EQ(wsg_axis_speed(&ax), 0.0);
+    CHECK_EQ(wsg_axis_flags(&ax), WSG_SF_REFERENCED | WSG_SF_BLOCKED_MINUS);
+    CHECK_EQ(wsg_axis_speed_mode(&ax), 1);
+    CHECK_EQ(wsg_axis_grasp_state(&ax), WSG_GS_POSITIONING);
+    CHECK(wsg_axis_idle(&ax));
+    bare_steps(&ax, 100);
+    CHECK_NEAR(wsg_axis_width(&ax), 36.0, 1e-9);
+    CHECK_EQ(r.n, 0);
+    /* the same way again, slower: still pushing, still blocked */
+    CHECK_EQ(wsg_axis_request_speed(&ax, -20.0, 0), WSG_E_SUCCESS);
+    wsg_axis_settle(&ax);
+    CHECK_EQ(wsg_axis_pressing(&ax), 1);
+    CHECK(wsg_axis_flags(&ax) & WSG_SF_BLOCKED_MINUS);
+    CHECK(!(wsg_axis_flags(&ax) & WSG_SF_MOVING));
+    CHECK(wsg_axis_idle(&ax));
+    /* a new force limit: squeezed to where it holds, at the next settle */
+    wsg_axis_set_force_limit(&ax, 60.0);
+    CHECK(!wsg_axis_idle(&ax));
+    wsg_axis_settle(&ax);
+    CHECK_NEAR(wsg_axis_width(&ax), 34.0, 1e-9);
+    CHECK_NEAR(wsg_axis_force(&ax), 60.0, 1e-9);
+    wsg_axis_set_force_limit(&ax, 20.0);
+    wsg_axis_settle(&ax);
+    CHECK_NEAR(wsg_axis_width(&ax), 38.0, 1e-9);
+    CHECK_NEAR(wsg_axis_force(&ax), 20.0, 1e-9);
+    CHECK_EQ(wsg_axis_pressing(&ax), 1);
+    CHECK(wsg_axis_idle(&ax));
+    /* away from the part: free, moving, the force falls off */
+    CHECK_EQ(wsg_axis_request_speed(&ax, 30.0, 0), WSG_E_SUCCESS);
+    wsg_axis_settle(&ax);
+    CHECK_EQ(wsg_axis_pressing(&ax), 0);
+    CHECK_EQ(wsg_axis_flags(&ax) & (WSG_SF_BLOCKED_MINUS | WSG_SF_MOVING),
+             WSG_SF_MOVING);
+    bare_steps(&ax, 200);
+    CHECK(wsg_axis_width(&ax) > 40.0);
+    CHECK_EQ(wsg_axis_force(&ax), 0.0);
+    /* into the open end stop: pushing there with the force limit */
+    CHECK_EQ(wsg_axis_request_speed(&ax, 100.0, 0), WSG_E_SUCCESS);
+    wsg_axis_settle(&ax);
+    bare_steps(&ax, 2000);
+    CHECK_EQ(wsg_axis_pressing(&ax), 1);
+    CHECK_NEAR(wsg_axis_width(&ax), 110.0, 1e-9);
+    CHECK_NEAR(wsg_axis_force(&ax), 20.0, 1e-9);
+    CHECK_EQ(wsg_axis_flags(&ax), WSG_SF_REFERENCED | WSG_SF_BLOCKED_PLUS);
+    /* an obstacle on the way back: blocked there */
+    wsg_axis_set_obstacle(&ax, 70.0);
+    CHECK_EQ(wsg_axis_request_speed(&ax, -100.0, 0), WSG_E_SUCCESS);
+    wsg_axis_settle(&ax);
+    bare_steps(&ax, 2000);
+    CHECK_EQ(wsg_axis_pressing(&ax), 1);
+    CHECK_NEAR(wsg_axis_width(&ax), 70.0, 1e-9);
+    CHECK(wsg_axis_flags(&ax) & WSG_SF_BLOCKED_MINUS);
+    /* taken away: the fingers move on, onto the part */
+    wsg_axis_set_obstacle(&ax, -1.0);
+    CHECK(!wsg_axis_idle(&ax));
+    wsg_axis_settle(&ax);
+    CHECK_EQ(wsg_axis_pressing(&ax), 0);
+    CHECK(!(wsg_axis_flags(&ax) & WSG_SF_BLOCKED_MINUS));
+    CHECK(wsg_axis_flags(&ax) & WSG_SF_MOVING);
+    bare_steps(&ax, 2000);
+    CHECK_EQ(wsg_axis_pressing(&ax), 1);
+    CHECK_NEAR(wsg_axis_width(&ax), 38.0, 1e-9);
+    /* the part goes: on into the closed end stop */
+    wsg_axis_set_part(&ax, -1.0, 0);
+    wsg_axis_settle(&ax);
+    CHECK_EQ(wsg_axis_pressing(&ax), 0);
+    bare_steps(&ax, 2000);
+    CHECK_EQ(wsg_axis_pressing(&ax), 1);
+    CHECK_NEAR(wsg_axis_width(&ax), 0.0, 1e-9);
+    CHECK_EQ(r.n, 0); /* no block ended it */
+    /* set speed 0 at the block: no longer pushing, standing */
+    CHECK_EQ(wsg_axis_request_speed(&ax, 0.0, 0), WSG_E_SUCCESS);
+    wsg_axis_settle(&ax);
+    CHECK_EQ(wsg_axis_pressing(&ax), 0);
+    CHECK_EQ(wsg_axis_force(&ax), 0.0);
+    CHECK(!(wsg_axis_flags(&ax) & WSG_SF_MOVING));
+    CHECK(wsg_axis_idle(&ax));
+    /* and into it again: pushing at once */
+    CHECK_EQ(wsg_axis_request_speed(&ax, -1.0, 0), WSG_E_SUCCESS);
+    wsg_axis_settle(&ax);
+    CHECK_EQ(wsg_axis_pressing(&ax), 1);
+    CHECK(wsg_axis_idle(&ax));
+}
+
+/* Speed mode replaces a running motion, whose owner hears E_CMD_ABORTED,
+ * and starts from the fingers' velocity; a clamp it takes over goes on
+ * pushing; a motion that replaces speed mode starts from rest. */
+static void test_speed_replace(void)
+{
+    struct wsg_axis ax;
+    struct rec r;
+    double v;
+
+    bare_init(&ax, &r);
+    CHECK_EQ(wsg_axis_request_move(&ax, 0, 10.0, 50.0, 1), WSG_E_CMD_PENDING);
+    wsg_axis_settle(&ax);
+    bare_steps(&ax, 800);
+    v = wsg_axis_speed(&ax);
+    CHECK_NEAR(v, -50.0, 1e-9);
+    CHECK_EQ(wsg_axis_request_speed(&ax, -30.0, 0), WSG_E_SUCCESS);
+    wsg_axis_settle(&ax);
+    REQUIRE(r.n == 1);
+    CHECK_EQ(r.tag[0], 1);
+    CHECK_EQ(r.id[0], WSG_CMD_PREPOSITION);
+    CHECK_EQ(r.status[0], WSG_E_CMD_ABORTED);
+    CHECK_EQ(wsg_axis_speed_mode(&ax), 1);
+    CHECK_NEAR(wsg_axis_speed(&ax), -50.0, 1e-9);
+    bare_steps(&ax, 1);
+    CHECK_NEAR(wsg_axis_speed(&ax), -45.0, 1e-9);
+    /* a new owner of speed mode: the old one hears E_CMD_ABORTED; the same
+     * owner again hears nothing */
+    CHECK_EQ(wsg_axis_request_speed(&ax, -30.0, 5), WSG_E_SUCCESS);
+    wsg_axis_settle(&ax);
+    REQUIRE(r.n == 2);
+    CHECK_EQ(r.tag[1], 0);
+    CHECK_EQ(r.status[1], WSG_E_CMD_ABORTED);
+    CHECK_EQ(wsg_axis_request_speed(&ax, -20.0, 5), WSG_E_SUCCESS);
+    wsg_axis_settle(&ax);
+    CHECK_EQ(r.n, 2);
+    CHECK_NEAR(wsg_axis_speed(&ax), -45.0, 1e-9); /* no restart */
+
+    /* a move over speed mode: from rest where the fingers are */
+    CHECK_EQ(wsg_axis_request_move(&ax, 0, 90.0, 100.0, 2), WSG_E_CMD_PENDING);
+    wsg_axis_settle(&ax);
+    REQUIRE(r.n == 3);
+    CHECK_EQ(r.tag[2], 5);
+    CHECK_EQ(r.status[2], WSG_E_CMD_ABORTED);
+    CHECK_EQ(wsg_axis_speed(&ax), 0.0);
+    CHECK_EQ(wsg_axis_speed_mode(&ax), 0);
+    CHECK_EQ(bare_final(&ax, &r, 4000), WSG_E_SUCCESS);
+    CHECK_NEAR(wsg_axis_width(&ax), 90.0, 1e-9);
+
+    /* a grasp holding a part (its result given): speed mode takes the
+     * clamp over and pushes on at once */
+    wsg_axis_set_part(&ax, 40.0, 0);
+    CHECK_EQ(wsg_axis_request_grasp(&ax, 40.0, 100.0, 3), WSG_E_CMD_PENDING);
+    CHECK_EQ(bare_final(&ax, &r, 4000), WSG_E_SUCCESS);
+    CHECK_EQ(wsg_axis_request_speed(&ax, -10.0, 0), WSG_E_SUCCESS);
+    wsg_axis_settle(&ax);
+    CHECK_EQ(r.n, 5);
+    CHECK_EQ(wsg_axis_pressing(&ax), 1);
+    CHECK_EQ(wsg_axis_grasp_state(&ax), WSG_GS_POSITIONING);
+    CHECK_NEAR(wsg_axis_width(&ax), 40.0 - 40.0 / 50.0, 1e-9);
+    CHECK_NEAR(wsg_axis_force(&ax), 40.0, 1e-9);
+    CHECK_EQ(wsg_axis_flags(&ax), WSG_SF_REFERENCED | WSG_SF_BLOCKED_MINUS);
+    CHECK(wsg_axis_idle(&ax));
+    CHECK_EQ(ax.clamping, 0); /* the clamp is speed mode's push now */
+    /* a grasp replacing speed mode: its own result only */
+    CHECK_EQ(wsg_axis_request_grasp(&ax, 39.0, 100.0, 4), WSG_E_CMD_PENDING);
+    wsg_axis_settle(&ax);
+    REQUIRE(r.n == 6);
+    CHECK_EQ(r.status[5], WSG_E_CMD_ABORTED);
+    CHECK_EQ(bare_final(&ax, &r, 4000), WSG_E_SUCCESS);
+    CHECK_EQ(r.tag[6], 4);
+    CHECK_EQ(wsg_axis_grasp_state(&ax), WSG_GS_HOLDING);
+}
+
+/* What ends speed mode besides a Stop: FAST STOP, faults, soft limits. */
+static void test_speed_ends(void)
+{
+    struct wsg_axis ax;
+    struct rec r;
+
+    bare_init(&ax, &r);
+    CHECK_EQ(wsg_axis_request_speed(&ax, -50.0, 0), WSG_E_SUCCESS);
+    wsg_axis_settle(&ax);
+    bare_steps(&ax, 100);
+    wsg_axis_request_fast_stop(&ax);
+    wsg_axis_settle(&ax);
+    CHECK_EQ(wsg_axis_speed_mode(&ax), 0);
+    CHECK_EQ(wsg_axis_speed(&ax), 0.0);
+    CHECK_EQ(wsg_axis_grasp_state(&ax), WSG_GS_ERROR);
+    CHECK(wsg_axis_flags(&ax) & WSG_SF_FAST_STOP);
+    REQUIRE(r.n == 1);
+    CHECK_EQ(r.status[0], WSG_E_CMD_ABORTED);
+    wsg_axis_request_ack(&ax);
+    wsg_axis_settle(&ax);
+
+    /* a power fault: FAST STOP; a temperature fault: ended, grip gone */
+    CHECK_EQ(wsg_axis_request_speed(&ax, -50.0, 0), WSG_E_SUCCESS);
+    wsg_axis_settle(&ax);
+    bare_steps(&ax, 10);
+    wsg_axis_set_fault(&ax, WSG_SF_POWER_FAULT, 1);
+    bare_steps(&ax, 1);
+    CHECK_EQ(wsg_axis_speed_mode(&ax), 0);
+    CHECK(wsg_axis_flags(&ax) & WSG_SF_FAST_STOP);
+    CHECK_EQ(r.n, 2);
+    wsg_axis_set_fault(&ax, WSG_SF_POWER_FAULT, 0);
+    wsg_axis_request_ack(&ax);
+    wsg_axis_settle(&ax);
+    wsg_axis_set_part(&ax, 60.0, 0);
+    CHECK_EQ(wsg_axis_request_speed(&ax, -50.0, 0), WSG_E_SUCCESS);
+    wsg_axis_settle(&ax);
+    bare_steps(&ax, 2000);
+    CHECK_EQ(wsg_axis_pressing(&ax), 1);
+    wsg_axis_set_fault(&ax, WSG_SF_TEMP_FAULT, 1);
+    wsg_axis_settle(&ax);
+    CHECK_EQ(wsg_axis_speed_mode(&ax), 0);
+    CHECK_EQ(wsg_axis_pressing(&ax), 0);
+    CHECK_EQ(wsg_axis_force(&ax), 0.0);
+    CHECK_EQ(wsg_axis_grasp_state(&ax), WSG_GS_ERROR);
+    CHECK_EQ(r.n, 3);
+    CHECK_EQ(r.status[2], WSG_E_CMD_ABORTED);
+    wsg_axis_set_fault(&ax, WSG_SF_TEMP_FAULT, 0);
+    wsg_axis_set_part(&ax, -1.0, 0);
+
+    /* a soft limit crossed: FAST STOP at the limit, E_RANGE_ERROR */
+    wsg_axis_set_soft_limits(&ax, 20.0, 100.0);
+    CHECK_EQ(wsg_axis_request_speed(&ax, -100.0, 0), WSG_E_SUCCESS);
+    wsg_axis_settle(&ax);
+    bare_steps(&ax, 2000);
+    CHECK_EQ(wsg_axis_speed_mode(&ax), 0);
+    CHECK_NEAR(wsg_axis_width(&ax), 20.0, 1e-9);
+    CHECK_EQ(wsg_axis_flags(&ax) & ~WSG_SF_CMD_FAILURE,
+             WSG_SF_REFERENCED | WSG_SF_SOFT_LIMIT_MINUS | WSG_SF_FAST_STOP);
+    REQUIRE(r.n == 4);
+    CHECK_EQ(r.status[3], WSG_E_RANGE_ERROR);
+    wsg_axis_request_ack(&ax);
+    wsg_axis_settle(&ax);
+    /* limits set with the fingers beyond them while heading deeper: at
+     * once; heading out goes on */
+    CHECK_EQ(wsg_axis_request_speed(&ax, 10.0, 0), WSG_E_SUCCESS);
+    wsg_axis_settle(&ax);
+    wsg_axis_set_soft_limits(&ax, 50.0, 100.0);
+    wsg_axis_settle(&ax);
+    CHECK_EQ(wsg_axis_speed_mode(&ax), 1);
+    CHECK_EQ(wsg_axis_request_speed(&ax, -10.0, 0), WSG_E_SUCCESS);
+    wsg_axis_settle(&ax);
+    CHECK_EQ(wsg_axis_speed_mode(&ax), 0);
+    CHECK(wsg_axis_flags(&ax) & WSG_SF_FAST_STOP);
+    CHECK_EQ(r.n, 5);
+    CHECK_EQ(r.status[4], WSG_E_RANGE_ERROR);
+}
+
+/* Speed mode seen by a host: its 21h is refused while it runs, 22h stops
+ * it, 40h-45h report it as any motion. */
+static void test_speed_host(void)
+{
+    struct tdev t;
+    struct wsg_axis *ax;
+
+    tdev_init(&t);
+    CHECK_EQ(tdev_home(&t, 0), WSG_E_SUCCESS);
+    ax = tdev_axis(&t);
+    wsg_axis_set_part(ax, 50.0, 0);
+    CHECK_EQ(wsg_axis_request_speed(ax, -80.0, 0), WSG_E_SUCCESS);
+    wsg_axis_settle(ax);
+    tdev_steps(&t, 100);
+    CHECK_EQ(tdev_flags(&t), WSG_SF_REFERENCED | WSG_SF_MOVING);
+    CHECK_EQ(tdev_grasp_state(&t), WSG_GS_POSITIONING);
+    CHECK_NEAR(tdev_getf(&t, WSG_CMD_GET_SPEED), -80.0, 1e-3);
+    CHECK_NEAR(tdev_getf(&t, WSG_CMD_GET_WIDTH), wsg_axis_width(ax), 1e-3);
+    CHECK_EQ(tdev_move(&t, 0, 90.0f, 100.0f), WSG_E_ALREADY_RUNNING);
+    tdev_steps(&t, 2000);
+    CHECK_NEAR(tdev_getf(&t, WSG_CMD_GET_FORCE), 40.0, 1e-3);
+    CHECK_NEAR(tdev_getf(&t, WSG_CMD_GET_WIDTH), 50.0 - 40.0 / 50.0, 1e-3);
+    CHECK_EQ(tdev_getf(&t, WSG_CMD_GET_SPEED), 0.0f);
+    CHECK_EQ(tdev_flags(&t), WSG_SF_REFERENCED | WSG_SF_BLOCKED_MINUS);
+    CHECK(wsg_device_idle(&t.dev));
+    CHECK_EQ(tdev_cmd2f(&t, WSG_CMD_GRASP, 50.0f, 100.0f),
+             WSG_E_ALREADY_RUNNING);
+    CHECK_EQ(tdev_cmd(&t, WSG_CMD_STOP, NULL, 0), WSG_E_SUCCESS);
+    CHECK_EQ(wsg_axis_speed_mode(ax), 0);
+    CHECK(tdev_flags(&t) & WSG_SF_AXIS_STOPPED);
+    CHECK_EQ(tdev_grasp_state(&t), WSG_GS_IDLE);
+    CHECK_EQ(tdev_getf(&t, WSG_CMD_GET_FORCE), 0.0f);
+    CHECK_EQ(tdev_move(&t, 0, 90.0f, 100.0f), WSG_E_CMD_PENDING);
+    CHECK_EQ(tdev_final(&t, WSG_CMD_PREPOSITION, 4000), WSG_E_SUCCESS);
+}
+
 /* The model's ranges, as the daemon's options check their settings and the
  * session commands clamp into them. */
 static void test_config_ranges(void)
@@ -840,5 +1422,13 @@ int main(void)
     test_soft_limits_inside();
     test_grasp_end_stop();
     test_world_at_once();
+    test_replace_aborts();
+    test_grasp_window();
+    test_pressing();
+    test_speed_ramp();
+    test_speed_block();
+    test_speed_replace();
+    test_speed_ends();
+    test_speed_host();
     TEST_EXIT();
 }

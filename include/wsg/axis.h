@@ -174,6 +174,17 @@ struct wsg_grasp_stats wsg_axis_stats(const struct wsg_axis *ax);
 uint32_t wsg_axis_faults(const struct wsg_axis *ax);
 /* Homed: the commands that need a reference may run. */
 int wsg_axis_referenced(const struct wsg_axis *ax);
+/* Speed mode runs (wsg_axis_request_speed; a script's mc.speed); a
+ * request not settled yet does not count. */
+int wsg_axis_speed_mode(const struct wsg_axis *ax);
+/* The fingers are held by a block with the drive pushing into it: a clamp
+ * (a grasp holding, a preposition blocked without stop on block) or speed
+ * mode pushing into a contact. The physical state a script's mc.blocked()
+ * reads: unlike the BLOCKED flags of 40h, which a blocked motion leaves set
+ * until the next one starts, it is 0 once the drive no longer pushes (stop
+ * on block, Stop, a part lost and the fingers snapping on, speed mode set
+ * to 0 or away from the contact). */
+int wsg_axis_pressing(const struct wsg_axis *ax);
 /* Session settings. */
 double wsg_axis_acc(const struct wsg_axis *ax);
 double wsg_axis_force_limit(const struct wsg_axis *ax);
@@ -193,8 +204,35 @@ uint16_t wsg_axis_request_move(struct wsg_axis *ax, uint8_t flags,
                                double width, double speed, uint32_t tag);
 uint16_t wsg_axis_request_grasp(struct wsg_axis *ax, double width,
                                 double speed, uint32_t tag);
+/* The grasping window one grasp is judged by (NOTES.md): the clamping
+ * travel beyond the nominal width and the part width tolerance, in mm. A
+ * value below 0 takes the configuration's (clamp_travel,
+ * width_tolerance); others are clamped to 0..stroke. */
+struct wsg_grasp_window {
+    double travel;
+    double tolerance;
+};
+/* A grasp with its own window (a script's grasping.clamp, a connection's
+ * own settings); w NULL is wsg_axis_request_grasp. NaN in w is
+ * E_INVALID_PARAMETER. */
+uint16_t wsg_axis_request_grasp_in(struct wsg_axis *ax, double width,
+                                   double speed,
+                                   const struct wsg_grasp_window *w,
+                                   uint32_t tag);
 uint16_t wsg_axis_request_release(struct wsg_axis *ax, double width,
                                   double speed, uint32_t tag);
+/* Speed mode (a script's mc.speed): drive the fingers at v mm/s, negative
+ * closing, until a stop, a FAST STOP, a fault or a soft limit ends it. The
+ * velocity reaches v with the model's maximum acceleration (cfg.max_acc,
+ * not the session's: speed mode is the velocity controller itself); |v| is
+ * clamped to cfg.max_speed, and any smaller speed down to 0 is taken. A
+ * block does not end it: the fingers stay pushed against it with the force
+ * limit for as long as v points into it. Over speed mode it only changes
+ * the set speed; over another motion it replaces it, which ends
+ * E_CMD_ABORTED. Final results carry command ID 0 (no command of the
+ * command set). Returns E_INVALID_PARAMETER for NaN, else E_SUCCESS: the
+ * caller checks FAST STOP, faults and the reference as for any motion. */
+uint16_t wsg_axis_request_speed(struct wsg_axis *ax, double v, uint32_t tag);
 void wsg_axis_request_stop(struct wsg_axis *ax);
 void wsg_axis_request_fast_stop(struct wsg_axis *ax);
 void wsg_axis_request_ack(struct wsg_axis *ax);

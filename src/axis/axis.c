@@ -10,6 +10,11 @@
  * homing takes its reference, a preposition stops or clamps, a grasp holds
  * or reports no part by the clamping-travel window of NOTES.md.
  *
+ * Speed mode (a script's mc.speed) is the one motion without a profile: the
+ * velocity ramps to a set speed with the maximum acceleration, step by
+ * step, and a block does not end it: the fingers stay pushed against it
+ * for as long as the set speed points into it.
+ *
  * Handlers record requests; wsg_axis_settle applies them in a fixed order
  * (FAST STOP, acknowledge, stop, new motion), and wsg_axis_step settles and
  * then advances the physics. The dispatcher settles after every command, so
@@ -83,6 +88,11 @@ static const struct wsg_axis_model wsg_axis_models[] = {
 static double wsg_clamp(double v, double lo, double hi)
 {
     return v < lo ? lo : v > hi ? hi : v;
+}
+
+static double wsg_axis_sign(double v)
+{
+    return v < 0 ? -1.0 : v > 0 ? 1.0 : 0.0;
 }
 
 int wsg_axis_config_init(struct wsg_axis_config *cfg, const char *model)
@@ -281,6 +291,7 @@ void wsg_axis_reset(struct wsg_axis *ax)
     memset(&ax->stats, 0, sizeof ax->stats);
     memset(&ax->motion, 0, sizeof ax->motion);
     ax->clamping = 0;
+    ax->push_dir = 0;
     ax->acc = ax->cfg.default_acc;
     ax->force_limit = ax->cfg.default_force;
     ax->overdrive = 0;
@@ -393,22 +404,38 @@ static void wsg_axis_start(struct wsg_axis *ax, const struct wsg_motion *m)
 {
     int decel = m->kind != WSG_MOTION_HOMING;
 
+    /* A motion that replaces a running one (a script's mc.move over its
+     * own movement; the dispatcher refuses that with E_ALREADY_RUNNING)
+     * must not drop the old one's owner without its final result. */
+    wsg_axis_done(ax, &ax->motion, WSG_E_CMD_ABORTED);
     ax->motion = *m;
-    wsg_profile_init(&ax->motion.prof, ax->width, m->target, m->speed, ax->acc,
-                     decel);
-    /* A grasp that starts where its target is (at an end stop) still has a
-     * side: it pushes towards its nominal width, closing if that is not
-     * wider than the fingers (as wsg_axis_request_grasp chose). */
-    if (m->kind == WSG_MOTION_GRASP && ax->motion.prof.dist < WSG_AXIS_EPS)
-        ax->motion.prof.dir = m->nominal <= ax->width ? -1.0 : 1.0;
     ax->clamping = 0;
-    ax->force = 0.0;
+    ax->push_dir = 0;
+    if (m->kind == WSG_MOTION_SPEED) {
+        /* The velocity controller takes over from whatever moved the
+         * fingers, at their velocity, against what they touch. */
+        ax->force = wsg_axis_contact_force(ax, ax->width);
+    } else {
+        /* A profile starts from rest: a motion that replaces a moving one
+         * (a script's, over speed mode) starts where the fingers are. */
+        wsg_profile_init(&ax->motion.prof, ax->width, m->target, m->speed,
+                         ax->acc, decel);
+        /* A grasp that starts where its target is (at an end stop) still
+         * has a side: it pushes towards its nominal width, closing if that
+         * is not wider than the fingers (as wsg_axis_request_grasp
+         * chose). */
+        if (m->kind == WSG_MOTION_GRASP && ax->motion.prof.dist < WSG_AXIS_EPS)
+            ax->motion.prof.dir = m->nominal <= ax->width ? -1.0 : 1.0;
+        ax->speed = 0.0;
+        ax->force = 0.0;
+    }
     if (m->kind == WSG_MOTION_SNAP)
         return;
     ax->event_flags &= ~(WSG_SF_AXIS_STOPPED | WSG_SF_TARGET_POS_REACHED |
                          WSG_SF_BLOCKED_MINUS | WSG_SF_BLOCKED_PLUS);
     switch (m->kind) {
     case WSG_MOTION_MOVE:
+    case WSG_MOTION_SPEED:
         ax->grasp_state = WSG_GS_POSITIONING;
         break;
     case WSG_MOTION_GRASP:
@@ -430,6 +457,7 @@ static void wsg_axis_halt(struct wsg_axis *ax)
     ax->speed = 0.0;
     ax->force = 0.0;
     ax->clamping = 0;
+    ax->push_dir = 0;
 }
 
 static void wsg_axis_clamp(struct wsg_axis *ax, double f, double target,
@@ -483,8 +511,8 @@ static void wsg_axis_blocked(struct wsg_axis *ax)
         break;
     case WSG_MOTION_GRASP:
         ax->stats.total++;
-        if (dir < 0 ? ax->width <= m.nominal + ax->cfg.width_tolerance
-                    : ax->width >= m.nominal - ax->cfg.width_tolerance) {
+        if (dir < 0 ? ax->width <= m.nominal + m.tolerance
+                    : ax->width >= m.nominal - m.tolerance) {
             ax->grasp_state = WSG_GS_HOLDING;
             ax->event_flags |= WSG_SF_TARGET_POS_REACHED;
             wsg_axis_clamp(ax, f, m.target, m.speed, dir);
@@ -553,6 +581,20 @@ static void wsg_axis_fast_stop(struct wsg_axis *ax)
     wsg_axis_abort(ax, WSG_E_CMD_ABORTED);
 }
 
+/* A new set speed over speed mode: no restart. The velocity ramps on from
+ * where it is, and a push into the same contact goes on (blocked stays
+ * blocked, which a script's PD loop reads after every mc.speed). The
+ * newest request owns it; an earlier owner of another tag hears
+ * E_CMD_ABORTED, as for any motion replaced. */
+static void wsg_axis_speed_change(struct wsg_axis *ax,
+                                  const struct wsg_motion *m)
+{
+    if (m->tag != ax->motion.tag)
+        wsg_axis_done(ax, &ax->motion, WSG_E_CMD_ABORTED);
+    ax->motion.tag = m->tag;
+    ax->motion.speed = m->speed;
+}
+
 static void wsg_axis_apply_requests(struct wsg_axis *ax)
 {
     if (ax->req_cancelled.kind != WSG_MOTION_NONE) {
@@ -580,7 +622,10 @@ static void wsg_axis_apply_requests(struct wsg_axis *ax)
     if (ax->req_motion.kind != WSG_MOTION_NONE) {
         struct wsg_motion m = ax->req_motion;
         memset(&ax->req_motion, 0, sizeof ax->req_motion);
-        wsg_axis_start(ax, &m);
+        if (m.kind == WSG_MOTION_SPEED && ax->motion.kind == WSG_MOTION_SPEED)
+            wsg_axis_speed_change(ax, &m);
+        else
+            wsg_axis_start(ax, &m);
     }
 }
 
@@ -618,15 +663,20 @@ static int wsg_axis_soft_limit_hit(struct wsg_axis *ax, double x, double v)
  * on): stopped at once, as at the limit (3.3.5, D4/D5). */
 static void wsg_axis_soft_limit_check(struct wsg_axis *ax)
 {
-    double dir = ax->motion.prof.dir;
+    double dir = ax->motion.prof.dir, target = ax->motion.target;
 
     if (!ax->soft_limits || ax->motion.kind == WSG_MOTION_NONE ||
         ax->motion.kind == WSG_MOTION_HOMING)
         return;
+    /* Speed mode heads for the end stop its set speed points to. */
+    if (ax->motion.kind == WSG_MOTION_SPEED) {
+        dir = wsg_axis_sign(ax->motion.speed);
+        target = dir != 0.0 ? wsg_axis_end_stop(ax, dir) : ax->width;
+    }
     if ((dir < 0 && ax->width < ax->soft_minus - WSG_AXIS_EPS &&
-         ax->motion.target < ax->width - WSG_AXIS_EPS) ||
+         target < ax->width - WSG_AXIS_EPS) ||
         (dir > 0 && ax->width > ax->soft_plus + WSG_AXIS_EPS &&
-         ax->motion.target > ax->width + WSG_AXIS_EPS))
+         target > ax->width + WSG_AXIS_EPS))
         wsg_axis_soft_limit_stop(ax);
 }
 
@@ -674,6 +724,156 @@ static void wsg_axis_advance(struct wsg_axis *ax, double dt)
     ax->force = wsg_axis_contact_force(ax, x);
     if (over)
         wsg_axis_arrived(ax);
+}
+
+/* Where fingers that speed mode pushes in direction dir with force f stand,
+ * if something holds them (*x). A part that reaches them stands where f
+ * squeezes it, so a new force limit (or a part that changed) moves them
+ * there at once, unless the obstacle on the way or the end stop holds them
+ * first; the obstacle and the end stop hold them only where they are.
+ * Unlike wsg_axis_block_at's clamp, which holds the force it blocked with,
+ * speed mode pushes with the force limit of the moment. */
+static int wsg_axis_push_at(const struct wsg_axis *ax, double dir, double f,
+                            double *x)
+{
+    double w = ax->width, ow = wsg_axis_rep(ax, ax->obstacle_width);
+    double end = wsg_axis_end_stop(ax, dir);
+
+    if (dir < 0 && ax->part &&
+        wsg_axis_rep(ax, ax->part_width) >= w - WSG_AXIS_EPS) {
+        double p =
+            wsg_clamp(wsg_axis_squeezed(ax, f), wsg_axis_end_stop(ax, -1.0),
+                      wsg_axis_end_stop(ax, 1.0));
+        /* The obstacle is rigid either way: the fingers do not pass it,
+         * squeezing further or pushed back by the part. */
+        if (ax->obstacle && ow >= fmin(p, w) - WSG_AXIS_EPS &&
+            ow <= fmax(p, w) + WSG_AXIS_EPS)
+            p = ow;
+        *x = p;
+        return 1;
+    }
+    if (ax->obstacle && fabs(w - ow) <= WSG_AXIS_EPS) {
+        *x = ow;
+        return 1;
+    }
+    if (fabs(w - end) <= WSG_AXIS_EPS) {
+        *x = end;
+        return 1;
+    }
+    return 0;
+}
+
+/* Standing fingers whose set speed points into a block right at them (a
+ * clamp that speed mode took over, a push resumed): they push at once, as
+ * a moving one would on its next step. */
+static int wsg_axis_at_block(const struct wsg_axis *ax, double dir, double f)
+{
+    double x_block;
+
+    if (wsg_axis_next_block(ax, dir, f, &x_block) &&
+        fabs(x_block - ax->width) <= WSG_AXIS_EPS)
+        return 1;
+    return fabs(ax->width - wsg_axis_end_stop(ax, dir)) <= WSG_AXIS_EPS;
+}
+
+static void wsg_axis_push(struct wsg_axis *ax, double dir)
+{
+    ax->push_dir = dir < 0 ? -1 : 1;
+    ax->speed = 0.0;
+    ax->force = ax->force_limit;
+    ax->event_flags |= dir < 0 ? WSG_SF_BLOCKED_MINUS : WSG_SF_BLOCKED_PLUS;
+}
+
+/* Speed mode between steps: a push follows the force limit and the world
+ * (wsg_axis_push_at) and ends when the set speed turns away from its block
+ * or the block goes (the fingers free, from rest); standing fingers push
+ * into a block at them; standing free, they feel the part they touch. */
+static void wsg_axis_speed_settle(struct wsg_axis *ax)
+{
+    double d = wsg_axis_sign(ax->motion.speed), f = ax->force_limit, x;
+
+    if (ax->motion.kind != WSG_MOTION_SPEED)
+        return;
+    if (ax->push_dir &&
+        (d != ax->push_dir || !wsg_axis_push_at(ax, d, f, &x))) {
+        ax->push_dir = 0;
+        ax->event_flags &= ~(WSG_SF_BLOCKED_MINUS | WSG_SF_BLOCKED_PLUS);
+    }
+    if (!ax->push_dir && ax->speed == 0.0 && d != 0.0 &&
+        wsg_axis_at_block(ax, d, f))
+        wsg_axis_push(ax, d);
+    if (ax->push_dir) {
+        if (!wsg_axis_push_at(ax, d, f, &x))
+            x = ax->width; /* cannot happen: a block at them holds them */
+        if (wsg_axis_soft_limit_hit(ax, x, x - ax->width))
+            return;
+        ax->width = x;
+        ax->force = f;
+    } else if (ax->speed == 0.0) {
+        ax->force = wsg_axis_contact_force(ax, ax->width);
+    }
+}
+
+/* Speed mode in free motion: the velocity ramps to the set speed with the
+ * maximum acceleration, exactly within the step (the ramp may end inside
+ * it), and the fingers stop at the first block as any motion does. They
+ * push into it if the set speed points there (decelerating the other way,
+ * they just stand). */
+static void wsg_axis_speed_advance(struct wsg_axis *ax, double dt)
+{
+    double v0 = ax->speed, vs = ax->motion.speed, a = ax->cfg.max_acc;
+    double dv = vs - v0, v1, s, x, dir, x_block, end;
+
+    if (ax->push_dir || (v0 == 0.0 && vs == 0.0))
+        return;
+    if (fabs(dv) > a * dt) {
+        v1 = v0 + (dv > 0 ? a : -a) * dt;
+        s = 0.5 * (v0 + v1) * dt;
+    } else {
+        double t1 = fabs(dv) / a;
+        v1 = vs;
+        s = 0.5 * (v0 + vs) * t1 + vs * (dt - t1);
+    }
+    ax->speed = v1;
+    if (s == 0.0)
+        return; /* turned round within the step */
+    x = ax->width + s;
+    dir = wsg_axis_sign(s);
+    if (wsg_axis_soft_limit_hit(ax, x, s))
+        return;
+    end = wsg_axis_end_stop(ax, dir);
+    if (wsg_axis_next_block(ax, dir, ax->force_limit, &x_block) &&
+        (dir < 0 ? x <= x_block + WSG_AXIS_EPS : x >= x_block - WSG_AXIS_EPS))
+        x = x_block;
+    else if (dir < 0 ? x <= end : x >= end)
+        x = end;
+    else {
+        ax->width = x;
+        ax->force = wsg_axis_contact_force(ax, x);
+        return;
+    }
+    ax->width = x;
+    ax->speed = 0.0;
+    if (wsg_axis_sign(vs) == dir)
+        wsg_axis_push(ax, dir);
+    else
+        ax->force = wsg_axis_contact_force(ax, x);
+}
+
+/* Speed mode stands still and steps would change nothing: at set speed 0,
+ * or pushing steadily against its block. */
+static int wsg_axis_speed_steady(const struct wsg_axis *ax)
+{
+    double d = wsg_axis_sign(ax->motion.speed), x;
+
+    if (ax->push_dir)
+        return d == ax->push_dir &&
+               wsg_axis_push_at(ax, d, ax->force_limit, &x) &&
+               fabs(x - ax->width) <= WSG_AXIS_EPS &&
+               ax->force == ax->force_limit;
+    return ax->speed == 0.0 && d == 0.0 &&
+           fabs(ax->force - wsg_axis_contact_force(ax, ax->width)) <=
+               WSG_AXIS_EPS;
 }
 
 /* A clamping axis holds its block; if the block is gone the fingers snap on
@@ -772,6 +972,7 @@ void wsg_axis_settle(struct wsg_axis *ax)
      * obstacle removed): lost, or snapping on, from now. */
     if (ax->motion.kind == WSG_MOTION_NONE && ax->clamping)
         wsg_axis_hold(ax);
+    wsg_axis_speed_settle(ax);
     wsg_axis_soft_limit_check(ax);
 }
 
@@ -781,7 +982,9 @@ void wsg_axis_step(struct wsg_axis *ax)
 
     ax->time_us += ax->cfg.step_us;
     wsg_axis_settle(ax);
-    if (ax->motion.kind != WSG_MOTION_NONE)
+    if (ax->motion.kind == WSG_MOTION_SPEED)
+        wsg_axis_speed_advance(ax, dt);
+    else if (ax->motion.kind != WSG_MOTION_NONE)
         wsg_axis_advance(ax, dt);
     wsg_axis_thermal(ax, dt);
 }
@@ -790,9 +993,12 @@ int wsg_axis_idle(const struct wsg_axis *ax)
 {
     double x_block;
 
-    if (ax->motion.kind != WSG_MOTION_NONE || ax->req_fast_stop ||
-        ax->req_ack || ax->req_stop || ax->req_motion.kind ||
-        ax->req_cancelled.kind)
+    if (ax->req_fast_stop || ax->req_ack || ax->req_stop ||
+        ax->req_motion.kind || ax->req_cancelled.kind)
+        return 0;
+    if (ax->motion.kind == WSG_MOTION_SPEED
+            ? !wsg_axis_speed_steady(ax)
+            : ax->motion.kind != WSG_MOTION_NONE)
         return 0;
     if (ax->clamping &&
         (!wsg_axis_block_at(ax, ax->clamp_dir, ax->clamp_force, &x_block) ||
@@ -811,7 +1017,11 @@ uint32_t wsg_axis_flags(const struct wsg_axis *ax)
 
     if (ax->referenced)
         f |= WSG_SF_REFERENCED;
-    if (ax->motion.kind != WSG_MOTION_NONE)
+    /* Speed mode drives the fingers unless they stand at set speed 0 or
+     * are pushed against a block. */
+    if (ax->motion.kind != WSG_MOTION_NONE &&
+        !(ax->motion.kind == WSG_MOTION_SPEED &&
+          (ax->push_dir || (ax->speed == 0.0 && ax->motion.speed == 0.0))))
         f |= WSG_SF_MOVING;
     if (ax->soft_limits && ax->width <= ax->soft_minus + WSG_AXIS_EPS)
         f |= WSG_SF_SOFT_LIMIT_MINUS;
@@ -897,6 +1107,17 @@ uint32_t wsg_axis_faults(const struct wsg_axis *ax)
 int wsg_axis_referenced(const struct wsg_axis *ax)
 {
     return ax->referenced;
+}
+
+int wsg_axis_speed_mode(const struct wsg_axis *ax)
+{
+    return ax->motion.kind == WSG_MOTION_SPEED;
+}
+
+int wsg_axis_pressing(const struct wsg_axis *ax)
+{
+    return ax->clamping ||
+           (ax->motion.kind == WSG_MOTION_SPEED && ax->push_dir != 0);
 }
 
 double wsg_axis_acc(const struct wsg_axis *ax)
@@ -985,27 +1206,55 @@ uint16_t wsg_axis_request_move(struct wsg_axis *ax, uint8_t flags,
     return st;
 }
 
-uint16_t wsg_axis_request_grasp(struct wsg_axis *ax, double width,
-                                double speed, uint32_t tag)
+/* A window value: below 0 the configuration's, else clamped into the
+ * range the configuration's own takes (wsg_axis_config_range). */
+static double wsg_axis_window_value(const struct wsg_axis *ax, double v,
+                                    enum wsg_axis_setting s, double cfg_value)
 {
-    double target;
+    struct wsg_axis_range r = wsg_axis_config_range(&ax->cfg, s);
+
+    return v < 0 ? cfg_value : wsg_clamp(v, r.min, r.max);
+}
+
+uint16_t wsg_axis_request_grasp_in(struct wsg_axis *ax, double width,
+                                   double speed,
+                                   const struct wsg_grasp_window *w,
+                                   uint32_t tag)
+{
+    double target, travel = ax->cfg.clamp_travel;
+    double tolerance = ax->cfg.width_tolerance;
     uint16_t st;
 
     if (isnan(width) || isnan(speed))
         return WSG_E_INVALID_PARAMETER;
+    if (w) {
+        if (isnan(w->travel) || isnan(w->tolerance))
+            return WSG_E_INVALID_PARAMETER;
+        travel = wsg_axis_window_value(ax, w->travel, WSG_AXIS_CLAMP_TRAVEL,
+                                       travel);
+        tolerance = wsg_axis_window_value(ax, w->tolerance,
+                                          WSG_AXIS_WIDTH_TOLERANCE, tolerance);
+    }
     width = wsg_axis_clamp_width(ax, width);
     if (wsg_axis_outside_soft_limits(ax, width))
         return WSG_E_RANGE_ERROR;
     speed = wsg_clamp(speed, ax->cfg.min_speed, ax->cfg.max_speed);
     /* Close onto a part narrower than the fingers, open into a part around
      * them, in both cases through the clamping travel beyond it. */
-    target = width <= ax->width ? width - ax->cfg.clamp_travel
-                                : width + ax->cfg.clamp_travel;
+    target = width <= ax->width ? width - travel : width + travel;
     target = wsg_axis_clamp_width(ax, target);
     st = wsg_axis_request(ax, WSG_MOTION_GRASP, WSG_CMD_GRASP, target, speed,
                           tag);
     ax->req_motion.nominal = width;
+    /* Kept with the motion: the window is judged when it blocks. */
+    ax->req_motion.tolerance = tolerance;
     return st;
+}
+
+uint16_t wsg_axis_request_grasp(struct wsg_axis *ax, double width,
+                                double speed, uint32_t tag)
+{
+    return wsg_axis_request_grasp_in(ax, width, speed, NULL, tag);
 }
 
 uint16_t wsg_axis_request_release(struct wsg_axis *ax, double width,
@@ -1019,6 +1268,18 @@ uint16_t wsg_axis_request_release(struct wsg_axis *ax, double width,
     speed = wsg_clamp(speed, ax->cfg.min_speed, ax->cfg.max_speed);
     return wsg_axis_request(ax, WSG_MOTION_RELEASE, WSG_CMD_RELEASE, width,
                             speed, tag);
+}
+
+uint16_t wsg_axis_request_speed(struct wsg_axis *ax, double v, uint32_t tag)
+{
+    double vmax = ax->cfg.max_speed;
+
+    if (isnan(v))
+        return WSG_E_INVALID_PARAMETER;
+    /* No minimum: a PD loop near its target asks for small speeds. */
+    wsg_axis_request(ax, WSG_MOTION_SPEED, 0, 0.0, wsg_clamp(v, -vmax, vmax),
+                     tag);
+    return WSG_E_SUCCESS;
 }
 
 /* A motion accepted in this step but not started owes an E_CMD_ABORTED. */

@@ -17,7 +17,8 @@ enum wsg_motion_kind {
     WSG_MOTION_MOVE,
     WSG_MOTION_GRASP,
     WSG_MOTION_RELEASE,
-    WSG_MOTION_SNAP /* silent: a clamp released or a part lost */
+    WSG_MOTION_SNAP, /* silent: a clamp released or a part lost */
+    WSG_MOTION_SPEED /* speed mode: speed is the signed set speed */
 };
 
 /* A trapezoidal profile from rest; positions follow analytically from the
@@ -34,8 +35,9 @@ struct wsg_motion {
     enum wsg_motion_kind kind;
     uint8_t cmd_id;
     uint32_t tag;
-    double target;  /* where the profile ends */
-    double nominal; /* grasp: the part's nominal width; homing: +1/-1 */
+    double target;    /* where the profile ends */
+    double nominal;   /* grasp: the part's nominal width; homing: +1/-1 */
+    double tolerance; /* grasp: the part width tolerance it is judged by */
     double speed;
     uint8_t move_flags; /* preposition flags */
     struct wsg_profile prof;
@@ -60,6 +62,9 @@ struct wsg_axis {
     double clamp_target; /* where the fingers snap if the block goes */
     double clamp_speed;
     int clamp_dir;
+    /* Speed mode pushing into a block: the direction it pushes (-1, +1),
+     * or 0 while the fingers are free. */
+    int push_dir;
 
     /* Session settings, written by the setters (wsg_axis_set_*). */
     double acc;
