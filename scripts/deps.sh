@@ -5,6 +5,8 @@
 set -eu
 
 pkgs="cmake make gcc libc6-dev"
+# Scripts on the gripper run on Debian's Lua 5.4, found with pkg-config.
+pkgs="$pkgs pkgconf liblua5.4-dev"
 # The memcheck test (tests/memcheck.sh) runs the daemon under valgrind.
 pkgs="$pkgs valgrind"
 # The .deb and its test (tests/package/run.sh): CPack's Depends come from

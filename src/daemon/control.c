@@ -22,6 +22,7 @@
 
 #include <arpa/inet.h>
 #include <errno.h>
+#include <limits.h>
 #include <math.h>
 #include <netinet/in.h>
 #include <stdarg.h>
@@ -434,6 +435,139 @@ static void cmd_stats(struct ctl_ctx *c, int argc, char **argv)
           l->scale, l->paused ? "true" : "false");
 }
 
+/* s as a JSON string (quotes included) at *used, cut to fit: the escapes
+ * a JSON parser needs, control bytes as \u00XX, other bytes as they are
+ * (a script prints UTF-8, or bytes a client shows as it can). Returns the
+ * bytes of s taken. */
+static size_t append_json(char *buf, size_t cap, size_t *used, const char *s,
+                          size_t n)
+{
+    size_t i;
+
+    if (*used + 2 >= cap)
+        return 0;
+    buf[(*used)++] = '"';
+    for (i = 0; i < n; i++) {
+        unsigned char ch = (unsigned char)s[i];
+        char esc[8];
+        size_t k;
+
+        if (ch == '"' || ch == '\\')
+            k = (size_t)snprintf(esc, sizeof esc, "\\%c", ch);
+        else if (ch == '\n' || ch == '\t')
+            k = (size_t)snprintf(esc, sizeof esc, "\\%c",
+                                 ch == '\n' ? 'n' : 't');
+        else if (ch < 0x20 || ch == 0x7F)
+            k = (size_t)snprintf(esc, sizeof esc, "\\u%04x", ch);
+        else
+            k = (size_t)snprintf(esc, sizeof esc, "%c", ch);
+        if (*used + k + 2 > cap)
+            break;
+        memcpy(buf + *used, esc, k);
+        *used += k;
+    }
+    buf[(*used)++] = '"';
+    buf[*used] = '\0';
+    return i;
+}
+
+static const char *const script_states[] = {[WSG_SCRIPT_STOPPED] = "stopped",
+                                            [WSG_SCRIPT_RUNNING] = "running",
+                                            [WSG_SCRIPT_RUNNABLE] = "runnable",
+                                            [WSG_SCRIPT_READING] = "reading",
+                                            [WSG_SCRIPT_SLEEPING] =
+                                                "sleeping"};
+
+static void script_status(struct ctl_ctx *c, struct wsg_script *h)
+{
+    char buf[WSG_CTL_REPLY_MAX - 8];
+    struct wsg_script_status st;
+    uint8_t ids[256];
+    size_t used = 0, n, i;
+
+    wsg_script_status(h, &st);
+    append(buf, sizeof buf, &used, "{\"running\":%s,\"failed\":%s,\"error\":",
+           st.running ? "true" : "false", st.failed ? "true" : "false");
+    if (st.error)
+        append_json(buf, sizeof buf, &used, st.error, strlen(st.error));
+    else
+        append(buf, sizeof buf, &used, "null");
+    append(buf, sizeof buf, &used, ",\"file\":");
+    if (st.file)
+        append_json(buf, sizeof buf, &used, st.file, strlen(st.file));
+    else
+        append(buf, sizeof buf, &used, "null");
+    append(buf, sizeof buf, &used, ",\"state\":\"%s\",\"registered\":[",
+           script_states[st.state]);
+    n = wsg_script_registered(h, ids, sizeof ids);
+    for (i = 0; i < n; i++)
+        append(buf, sizeof buf, &used, "%s%u", i ? "," : "", (unsigned)ids[i]);
+    append(buf, sizeof buf, &used,
+           "],\"memory\":%lu,\"memory_max\":%lu,\"preempted\":%llu}",
+           (unsigned long)st.memory, (unsigned long)st.memory_max,
+           (unsigned long long)st.preempted);
+    reply(c, "ok %s", buf);
+}
+
+/* What the script printed from byte FROM on, as much as one answer
+ * holds: the client asks again from "next" until it reaches "end". */
+static void script_output(struct ctl_ctx *c, struct wsg_script *h,
+                          const char *from_text)
+{
+    char buf[WSG_CTL_REPLY_MAX - 8], text[1024];
+    unsigned long from = 0;
+    uint64_t start, end;
+    size_t used = 0, n, took;
+
+    if (from_text && wsg_parse_ulong(from_text, ULONG_MAX, &from) < 0) {
+        reply(c, "error script output: FROM must be a byte offset");
+        return;
+    }
+    start = wsg_script_output(h, from, text, sizeof text, &n, &end);
+    append(buf, sizeof buf, &used,
+           "{\"from\":%llu,\"lost\":%llu,\"text\":", (unsigned long long)start,
+           (unsigned long long)(start > from ? start - from : 0));
+    took = append_json(buf, sizeof buf - 64, &used, text, n);
+    append(buf, sizeof buf, &used, ",\"next\":%llu,\"end\":%llu}",
+           (unsigned long long)(start + took), (unsigned long long)end);
+    reply(c, "ok %s", buf);
+}
+
+static void cmd_script(struct ctl_ctx *c, int argc, char **argv)
+{
+    struct wsg_gripper *g = c->ctl->cur;
+    struct wsg_script *h;
+    char err[512];
+    int r;
+
+    if (argc < 2) {
+        reply(c, "error usage: script run FILE | script stop | script status "
+                 "| script output [FROM]");
+        return;
+    }
+    if (wsg_gripper_script(g, &h) < 0) {
+        reply(c, "error script: no memory for a script host");
+        return;
+    }
+    if (strcmp(argv[1], "run") == 0 && argc == 3) {
+        r = wsg_script_start(h, argv[2], err, sizeof err);
+        if (r < 0)
+            reply(c, "error script: %s", err);
+        else
+            reply(c, "ok script running %s", argv[2]);
+    } else if (strcmp(argv[1], "stop") == 0 && argc == 2) {
+        r = wsg_script_stop(h);
+        reply(c, r < 0 ? "ok script not running" : "ok script stopped");
+    } else if (strcmp(argv[1], "status") == 0 && argc == 2) {
+        script_status(c, h);
+    } else if (strcmp(argv[1], "output") == 0 && argc <= 3) {
+        script_output(c, h, argc == 3 ? argv[2] : NULL);
+    } else {
+        reply(c, "error usage: script run FILE | script stop | script status "
+                 "| script output [FROM]");
+    }
+}
+
 static void run_command(struct ctl_ctx *c, int argc, char **argv);
 static void cmd_help(struct ctl_ctx *c, int argc, char **argv);
 
@@ -492,6 +626,7 @@ static const struct ctl_command {
     {"reset", cmd_reset, 0, "reset"},
     {"gripper", cmd_gripper, 1, "gripper [N]"},
     {"stats", cmd_stats, 0, "stats"},
+    {"script", cmd_script, 1, "script run FILE|stop|status|output [FROM]"},
     {"help", cmd_help, 0, NULL},
 };
 

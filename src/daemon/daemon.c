@@ -152,6 +152,8 @@ static int open_gripper(struct wsg_daemon *d, struct wsg_gripper *g,
                        d->opt.grippers > 1 ? (int)index : -1);
     g->dev.lookup = gripper_lookup;
     g->dev.lookup_ctx = g;
+    g->runner = &d->runner;
+    g->script_memory = (size_t)o.script_memory << 20;
     r = wsg_gripper_set_latency(g, o.latency_ms, o.latency_jitter_ms);
     if (r < 0) {
         fprintf(stderr, "wsgemu: --latency: %s\n", strerror(-r));
@@ -196,6 +198,34 @@ static int open_gripper(struct wsg_daemon *d, struct wsg_gripper *g,
     return 0;
 }
 
+/* --script: a file that cannot be read is a bad start (status 1); a
+ * script that fails is the gripper's business, as on a real one: D20, its
+ * error on stderr and in the log, and the gripper serves on. */
+static int start_script(struct wsg_daemon *d, struct wsg_gripper *g)
+{
+    struct wsg_script *h;
+    char err[512];
+    int r;
+
+    r = wsg_gripper_script(g, &h);
+    if (r < 0) {
+        fprintf(stderr, "wsgemu: --script: %s\n", strerror(-r));
+        return r;
+    }
+    wsg_sched_touch(&d->sched, g);
+    r = wsg_script_start(h, d->opt.script_path, err, sizeof err);
+    wsg_axis_settle(wsg_device_axis(&g->dev));
+    wsg_sched_check(&d->sched, g);
+    if (r == -EINVAL) {
+        fprintf(stderr, "wsgemu: script %s failed: %s\n", d->opt.script_path,
+                err);
+        return 0;
+    }
+    if (r < 0)
+        fprintf(stderr, "wsgemu: --script: %s\n", err);
+    return r;
+}
+
 /* Signals come through a descriptor: blocked before anything else exists,
  * so a SIGTERM sent right after the ready line is queued for it, never
  * the default action. They stay blocked after close: a second SIGTERM
@@ -234,6 +264,9 @@ static int open_services(struct wsg_daemon *d)
     r = wsg_sched_init(&d->sched, &d->reactor, d->opt.step_us);
     if (r < 0)
         return r;
+    r = wsg_runner_init(&d->runner, &d->reactor, &d->sched);
+    if (r < 0)
+        return r;
     if (d->log.f)
         r = wsg_reactor_after(&d->reactor, daemon_log_flush, &d->log);
     return r;
@@ -249,6 +282,7 @@ int wsg_daemon_open(struct wsg_daemon *d)
     d->signal.fd = -1;
     d->sched.timer.fd = -1;
     d->fswatch.watch.fd = -1;
+    d->runner.watch.fd = -1;
     d->reactor.epfd = -1;
     if (d->opt.grippers > 1) {
         r = raise_fd_limit(&d->opt);
@@ -297,6 +331,13 @@ int wsg_daemon_open(struct wsg_daemon *d)
         /* Counted before it is complete: close undoes what it opened. */
         d->ngrippers = i + 1;
         r = open_gripper(d, &d->grippers[i], i);
+        if (r < 0)
+            return r;
+    }
+    /* The startup script, on every gripper, once all can be reached:
+     * it registers its IDs before the ready line is printed. */
+    for (i = 0; d->opt.script_path && i < d->opt.grippers; i++) {
+        r = start_script(d, &d->grippers[i]);
         if (r < 0)
             return r;
     }
@@ -417,6 +458,7 @@ void wsg_daemon_close(struct wsg_daemon *d)
     d->control = NULL;
     while (d->ngrippers > 0)
         close_gripper(&d->grippers[--d->ngrippers]);
+    wsg_runner_fini(&d->runner);
     wsg_sched_fini(&d->sched);
     wsg_fswatch_fini(&d->fswatch);
     if (d->signal.fd >= 0)

@@ -18,6 +18,7 @@
 #include "log.h"
 #include "options.h"
 #include "reactor.h"
+#include "runner.h"
 #include "sched.h"
 #include "transport.h"
 
@@ -30,6 +31,7 @@ struct wsg_daemon {
     size_t ngrippers;             /* set up so far */
     struct wsg_reactor reactor;
     struct wsg_sched sched;
+    struct wsg_runner runner; /* preempted scripts' turns */
     struct wsg_fswatch fswatch;
     struct wsg_watch signal; /* signalfd: SIGINT and SIGTERM end the run */
     uint8_t *rx;             /* one receive buffer for every transport */

@@ -105,6 +105,13 @@ uint64_t wsg_gripper_delay_dropped(const struct wsg_gripper *g)
     return n;
 }
 
+/* Steps from now until the first step that ends at or after due (the
+ * release and the script's wake-up run after a step), at least 1. */
+static uint64_t steps_until(uint64_t due, uint64_t now, uint64_t step)
+{
+    return due > now ? (due - now + step - 1) / step : 1;
+}
+
 uint64_t wsg_gripper_next(const struct wsg_gripper *g)
 {
     uint64_t best = wsg_device_next(&g->dev);
@@ -112,13 +119,19 @@ uint64_t wsg_gripper_next(const struct wsg_gripper *g)
     uint64_t now = wsg_axis_time(ax), step = wsg_axis_cfg(ax)->step_us;
     size_t i;
 
+    if (g->script && best > 1) {
+        uint64_t due = wsg_script_next(g->script);
+
+        if (due != UINT64_MAX && steps_until(due, now, step) < best)
+            best = steps_until(due, now, step);
+    }
+
     for (i = 0; g->delay && i < g->ntransports && best > 1; i++) {
         uint64_t due = wsg_delay_next_due(&g->delay[i]), k;
 
         if (due == UINT64_MAX)
             continue;
-        /* Released after a step: the first that ends at or after it. */
-        k = due > now ? (due - now + step - 1) / step : 1;
+        k = steps_until(due, now, step);
         if (k < best)
             best = k;
     }
@@ -142,16 +155,48 @@ uint64_t wsg_gripper_process(struct wsg_gripper *g, uint64_t n)
         wsg_device_step(&g->dev);
         wsg_device_poll_streaming(&g->dev);
         wsg_gripper_release(g);
+        if (g->script)
+            wsg_script_poll(g->script);
         ran++;
         n--;
     }
     return ran;
 }
 
+static void gripper_script_print(void *ctx, const char *text, size_t len)
+{
+    struct wsg_gripper *g = ctx;
+
+    wsg_log_text(&g->tap, "script", text, len);
+}
+
+static void gripper_script_wake(void *ctx)
+{
+    struct wsg_gripper *g = ctx;
+
+    wsg_runner_wake(g->runner, g);
+}
+
+int wsg_gripper_script(struct wsg_gripper *g, struct wsg_script **out)
+{
+    struct wsg_script_config cfg = {g->script_memory, gripper_script_print,
+                                    gripper_script_wake, g};
+    int r = 0;
+
+    if (!g->script)
+        r = wsg_script_new(&g->script, &g->dev, &cfg);
+    *out = g->script;
+    return r;
+}
+
 void wsg_gripper_fini(struct wsg_gripper *g)
 {
     size_t i;
 
+    if (g->runner)
+        wsg_runner_forget(g->runner, g);
+    wsg_script_free(g->script);
+    g->script = NULL;
     if (!g->delay)
         return;
     for (i = 0; i < WSG_TRANSPORT_MAX; i++)

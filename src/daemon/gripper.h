@@ -25,6 +25,8 @@
 
 #include "delay.h"
 #include "log.h"
+#include "runner.h"
+#include "script.h"
 #include "transport.h"
 #include "wsg/device.h"
 
@@ -45,6 +47,13 @@ struct wsg_gripper {
     /* --latency: delay[i] holds what transports[i] is to send; NULL
      * without a latency, so a fleet pays nothing for the option. */
     struct wsg_delay *delay;
+    /* Its script host, made on first use (NULL: none yet), and where a
+     * preempted script asks for its next turn. */
+    struct wsg_script *script;
+    size_t script_memory; /* --script-memory, bytes */
+    struct wsg_runner *runner;
+    struct wsg_gripper *next_ready; /* the runner's list */
+    uint8_t ready;
 };
 
 /* Delay every packet of g by ms plus a draw of 0..jitter_ms (simulated
@@ -58,19 +67,24 @@ int wsg_gripper_set_latency(struct wsg_gripper *g, uint32_t ms,
  * session that is gone loses its packets). */
 void wsg_gripper_release(struct wsg_gripper *g);
 /* g's next deadline in model steps from its time (at least 1): the
- * device's (wsg_device_next) or the first delayed packet's, whichever
- * comes first; UINT64_MAX when nothing is due. */
+ * device's (wsg_device_next), the first delayed packet's or the end of
+ * its script's sleep, whichever comes first; UINT64_MAX when nothing is
+ * due. */
 uint64_t wsg_gripper_next(const struct wsg_gripper *g);
-/* Consume n steps of elapsed time: model steps, stream polls and releases
- * of delayed packets at every step where something is due, one jump over
- * each stretch where nothing is. Returns the model steps run. */
+/* Consume n steps of elapsed time: model steps, stream polls, releases
+ * of delayed packets and a script's wake-up at every step where something
+ * is due, one jump over each stretch where nothing is. Returns the model
+ * steps run. */
 uint64_t wsg_gripper_process(struct wsg_gripper *g, uint64_t n);
 /* Packets waiting in g's delay lines, and those dropped because a line
  * was full (64 KiB). */
 size_t wsg_gripper_delayed(const struct wsg_gripper *g);
 uint64_t wsg_gripper_delay_dropped(const struct wsg_gripper *g);
-/* Free the delay lines (after the transports are closed); safe on a
- * gripper without them. */
+/* g's script host, made on first use: 0, or -ENOMEM. What the script
+ * prints goes to the communication log. */
+int wsg_gripper_script(struct wsg_gripper *g, struct wsg_script **out);
+/* Free the delay lines and the script host (after the transports are
+ * closed); safe on a gripper without them. */
 void wsg_gripper_fini(struct wsg_gripper *g);
 
 #endif

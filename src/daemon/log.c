@@ -126,6 +126,21 @@ static void add_fields(struct line *l, const struct wsg_layout *layout,
         add_value(l, &v[i]);
 }
 
+/* Bytes as the schema's raw field shows them ("data=01 02 ..."). */
+static void add_raw(struct line *l, const uint8_t *p, size_t n)
+{
+    static const struct wsg_field raw = WSG_F_BYTES("data", WSG_FRAME_MAX);
+    struct wsg_value v;
+
+    if (n == 0)
+        return;
+    memset(&v, 0, sizeof v);
+    v.field = &raw;
+    v.data = p;
+    v.len = n;
+    add_value(l, &v);
+}
+
 static void decode_in(struct line *l, uint8_t id, const uint8_t *p, size_t n)
 {
     add_fields(l, &wsg_schema[id].request, p, n);
@@ -144,13 +159,11 @@ static void decode_out(struct line *l, uint8_t id, const uint8_t *p, size_t n)
         add(l, " emulator=wsgemu-%s", WSG_VERSION);
 }
 
-/* Wall clock, simulated time, peer, direction, ID and name. */
-static void head(struct wsg_log_tap *tap, struct line *l,
-                 const struct wsg_session *s, const char *dir, uint8_t id)
+/* Wall clock and simulated time. */
+static void head_time(struct wsg_log_tap *tap, struct line *l)
 {
     struct wsg_log *lg = tap->log;
     struct timespec ts;
-    const char *name = wsg_cmd_name(id);
     uint64_t t = wsg_axis_time(wsg_device_axis_const(tap->dev));
 
     clock_gettime(CLOCK_REALTIME, &ts);
@@ -174,6 +187,15 @@ static void head(struct wsg_log_tap *tap, struct line *l,
         put_uint(l, (unsigned long long)tap->index, 1);
         put(l, " ", 1);
     }
+}
+
+/* Wall clock, simulated time, peer, direction, ID and name. */
+static void head(struct wsg_log_tap *tap, struct line *l,
+                 const struct wsg_session *s, const char *dir, uint8_t id)
+{
+    const char *name = wsg_cmd_name(id);
+
+    head_time(tap, l);
     put_str(l, s->peer[0] ? s->peer : "?");
     put(l, " ", 1);
     put_str(l, dir);
@@ -203,6 +225,8 @@ static void log_in(void *ctx, const struct wsg_session *s,
         add(&l, " checksum-error");
     else if (ev == WSG_PARSE_OVERSIZE)
         add(&l, " oversize");
+    else if (wsg_device_registered(tap->dev, f->id))
+        add_raw(&l, f->payload, f->len); /* a script's own command */
     else
         decode_in(&l, f->id, f->payload, f->len);
     emit(tap->log, &l);
@@ -215,14 +239,21 @@ static void log_out(void *ctx, const struct wsg_session *s, const uint8_t *pkt,
     struct line l;
     size_t n;
 
-    /* The device only sends whole replies of its own making; the checks
-     * keep a malformed one from being read past its end. */
-    if (len < WSG_HEADER_LEN + 2 + WSG_CRC_LEN)
+    /* The device sends whole packets; the checks keep a malformed one
+     * from being read past its end. */
+    if (len < WSG_HEADER_LEN + WSG_CRC_LEN)
         return;
     n = wsg_get_u16(pkt + 4);
-    if (n < 2 || WSG_HEADER_LEN + n + WSG_CRC_LEN > len)
+    if (WSG_HEADER_LEN + n + WSG_CRC_LEN > len)
         return;
     l.n = 0;
+    /* A script's answer is its own bytes: no status of the firmware's. */
+    if (wsg_device_registered(tap->dev, pkt[3]) || n < 2) {
+        head(tap, &l, s, "out", pkt[3]);
+        add_raw(&l, pkt + WSG_HEADER_LEN, n);
+        emit(tap->log, &l);
+        return;
+    }
     head(tap, &l, s, "out", pkt[3]);
     put(&l, " ", 1);
     put_str(&l, wsg_status_name(wsg_get_u16(pkt + WSG_HEADER_LEN)));
@@ -275,6 +306,29 @@ void wsg_log_detach(struct wsg_log_tap *tap, struct wsg_device *d)
     d->trace_in = NULL;
     d->trace_out = NULL;
     d->trace_ctx = NULL;
+}
+
+void wsg_log_text(struct wsg_log_tap *tap, const char *who, const char *text,
+                  size_t len)
+{
+    struct line l;
+
+    if (!tap->log || !tap->log->f)
+        return;
+    while (len > 0) {
+        const char *nl = memchr(text, '\n', len);
+        size_t n = nl ? (size_t)(nl - text) : len;
+
+        l.n = 0;
+        head_time(tap, &l);
+        put_str(&l, who);
+        put(&l, " print ", 7);
+        put(&l, text, n);
+        emit(tap->log, &l);
+        n += nl ? 1 : 0;
+        text += n;
+        len -= n;
+    }
 }
 
 void wsg_log_flush(struct wsg_log *l)

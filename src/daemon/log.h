@@ -56,6 +56,11 @@ void wsg_log_attach(struct wsg_log *l, struct wsg_log_tap *tap,
                     struct wsg_device *d, int index);
 /* Unhook d if tap is its hook; safe on a zeroed tap. */
 void wsg_log_detach(struct wsg_log_tap *tap, struct wsg_device *d);
+/* Text that is not a packet (what a script prints), a line per line of
+ * it: "HH:MM:SS.mmm t=SIM WHO print TEXT". Nothing when tap is not
+ * attached. */
+void wsg_log_text(struct wsg_log_tap *tap, const char *who, const char *text,
+                  size_t len);
 /* Write out what is buffered (after a batch of events). */
 void wsg_log_flush(struct wsg_log *l);
 /* Flush and close; safe on a log never opened (zeroed). */

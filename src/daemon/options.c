@@ -553,6 +553,26 @@ static const struct wsg_setting settings[] = {
      .help = "a part of WIDTH mm (0..stroke)\n"
              "between the fingers at start,\n"
              "STIFFNESS N/mm (default 50)"},
+    {.name = "script",
+     .type = WSG_SETTING_TEXT,
+     .at = WSG_AT(script_path),
+     .section = WSG_SECTION_GRIPPER,
+     .arg = "FILE",
+     .help = "startup script: run the Lua script\n"
+             "FILE on the gripper at start;\n"
+             "require finds modules beside it"},
+    {.name = "script-memory",
+     .type = WSG_SETTING_UINT,
+     .at = WSG_AT(script_memory),
+     .min = WSG_SCRIPT_MEMORY_MIN_MIB,
+     .max = WSG_SCRIPT_MEMORY_MAX_MIB,
+     .unit = "MiB",
+     .def = "16",
+     .section = WSG_SECTION_GRIPPER,
+     .arg = "MIB",
+     .help = "memory a script may use, MiB\n"
+             "({range}, default {default}); past it\n"
+             "the script stops with an error"},
     {.name = "step-us",
      .type = WSG_SETTING_UINT,
      .at = WSG_AT(step_us),

@@ -20,10 +20,12 @@
 #include "transport.h" /* struct wsg_endpoint */
 #include "wsg/axis.h"
 
-#define WSG_STEP_US_MIN    100u
-#define WSG_STEP_US_MAX    100000u
-#define WSG_CAN_ID_DEFAULT 0x000u
-#define WSG_CAN_ID_MAX     0x7FEu /* answers go on ID + 1, an 11-bit ID too */
+#define WSG_SCRIPT_MEMORY_MIN_MIB 1u
+#define WSG_SCRIPT_MEMORY_MAX_MIB 1024u
+#define WSG_STEP_US_MIN           100u
+#define WSG_STEP_US_MAX           100000u
+#define WSG_CAN_ID_DEFAULT        0x000u
+#define WSG_CAN_ID_MAX            0x7FEu /* answers go on ID + 1, an 11-bit ID too */
 /* Room for the strings a config file gives (paths, names, the tag): they
  * must outlive the file's line buffer, and options hold no heap memory. */
 #define WSG_OPTIONS_STRBUF 2048u
@@ -76,7 +78,9 @@ struct wsg_options {
     uint32_t latency_ms;
     uint32_t latency_jitter_ms;
     uint32_t step_us;
-    const char *model; /* NULL: the default model */
+    const char *script_path; /* --script FILE: the startup script */
+    uint32_t script_memory;  /* --script-memory MiB */
+    const char *model;       /* NULL: the default model */
     /* The web page's settings, the model's defaults unless given. */
     struct wsg_model_value acceleration; /* mm/s^2 */
     struct wsg_model_value force_limit;  /* N */

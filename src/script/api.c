@@ -1,0 +1,809 @@
+/*
+ * What a script on the gripper can call: the sandboxed part of Lua's
+ * standard library, the gripper's own libraries (cmd, mc, gripper,
+ * grasping, finger, socket) and globals (bton, ntob, etob, E_*, sleep,
+ * print, printf), and the Lua 5.1/5.2 names that scripts of the gripper's
+ * era still use. docs/scripting.md describes each function, and where the
+ * public text leaves a meaning open, what the emulator chose.
+ *
+ * Motions a script starts carry tag 0: no host waits for their final
+ * result; the script watches mc.busy() and grasping.state(). Each request
+ * is settled at once, so the next call already sees it (as the dispatcher
+ * settles after each command).
+ */
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include <lauxlib.h>
+#include <lualib.h>
+
+#include "script_impl.h"
+
+/* grasping.clamp's closing speed: slow, as the fingers start at the part. */
+#define WSG_SCRIPT_CLAMP_SPEED 20.0
+
+/* ---- helpers ---- */
+
+static struct wsg_axis *api_axis(lua_State *L)
+{
+    return wsg_device_axis(wsg_script_of(L)->dev);
+}
+
+/* A blocking call must come from the script's body, where a yield reaches
+ * the host: from a coroutine of the script's own it would resume that
+ * coroutine's caller instead. */
+static struct wsg_script *api_body(lua_State *L, const char *fn)
+{
+    struct wsg_script *h = wsg_script_of(L);
+
+    if (L != h->co)
+        luaL_error(L, "%s: cannot wait inside a coroutine of the script", fn);
+    return h;
+}
+
+static uint8_t api_byte(lua_State *L, int arg)
+{
+    lua_Integer v = luaL_checkinteger(L, arg);
+
+    luaL_argcheck(L, v >= 0 && v <= 255, arg, "not a byte (0..255)");
+    return (uint8_t)v;
+}
+
+static double api_number(lua_State *L, int arg)
+{
+    double v = luaL_checknumber(L, arg);
+
+    luaL_argcheck(L, !isnan(v), arg, "NaN");
+    return v;
+}
+
+/* The status a motion request leaves the script with: E_SUCCESS when it
+ * started (there is no packet to be pending on), else why not. */
+static int api_motion(lua_State *L, uint16_t st)
+{
+    struct wsg_axis *ax = api_axis(L);
+
+    if (st == WSG_E_CMD_PENDING)
+        st = WSG_E_SUCCESS;
+    wsg_axis_settle(ax);
+    lua_pushinteger(L, st);
+    return 1;
+}
+
+/* The session cmd.send answers: the one whose packet was read last, else
+ * the one that sent the gripper anything last. */
+static struct wsg_session *api_host(struct wsg_script *h)
+{
+    struct wsg_session *s = wsg_device_session(h->dev, h->reply_tag);
+
+    return s ? s : wsg_device_session(h->dev, h->dev->last_tag);
+}
+
+static void api_bytes(lua_State *L, const uint8_t *p, int n)
+{
+    int i;
+
+    lua_createtable(L, n, 0);
+    for (i = 0; i < n; i++) {
+        lua_pushinteger(L, p[i]);
+        lua_rawseti(L, -2, i + 1);
+    }
+}
+
+/* ---- globals ---- */
+
+static int api_print(lua_State *L)
+{
+    struct wsg_script *h = wsg_script_of(L);
+    int i, n = lua_gettop(L);
+    luaL_Buffer b;
+
+    luaL_buffinit(L, &b);
+    for (i = 1; i <= n; i++) {
+        if (i > 1)
+            luaL_addchar(&b, '\t');
+        luaL_tolstring(L, i, NULL);
+        luaL_addvalue(&b);
+    }
+    luaL_addchar(&b, '\n');
+    luaL_pushresult(&b);
+    {
+        size_t len;
+        const char *s = lua_tolstring(L, -1, &len);
+
+        wsg_script_print(h, s, len);
+    }
+    return 0;
+}
+
+/* printf's output (the prelude formats). */
+static int api_output(lua_State *L)
+{
+    size_t len;
+    const char *s = luaL_checklstring(L, 1, &len);
+
+    wsg_script_print(wsg_script_of(L), s, len);
+    return 0;
+}
+
+static int api_sleep(lua_State *L)
+{
+    struct wsg_script *h = api_body(L, "sleep");
+    double ms = api_number(L, 1);
+    uint64_t us;
+
+    if (ms < 0)
+        ms = 0;
+    /* Past a year of simulated time, a year: no overflow of the clock. */
+    us = ms > 3.2e10 ? 3200000000000ull : (uint64_t)(ms * 1000.0 + 0.5);
+    h->wake_us = wsg_script_now(h) + us;
+    h->state = WSG_SCRIPT_SLEEPING;
+    return lua_yield(L, 0);
+}
+
+static int api_bton(lua_State *L)
+{
+    uint8_t b[4];
+    uint32_t u;
+    float f;
+    int i;
+
+    luaL_checktype(L, 1, LUA_TTABLE);
+    for (i = 0; i < 4; i++) {
+        lua_Integer v;
+        int ok;
+
+        lua_rawgeti(L, 1, i + 1);
+        v = lua_tointegerx(L, -1, &ok);
+        if (!ok || v < 0 || v > 255)
+            return luaL_error(L, "bton: element %d is not a byte", i + 1);
+        b[i] = (uint8_t)v;
+        lua_pop(L, 1);
+    }
+    u = wsg_get_u32(b);
+    memcpy(&f, &u, sizeof f);
+    lua_pushnumber(L, (lua_Number)f);
+    return 1;
+}
+
+static int api_ntob(lua_State *L)
+{
+    uint8_t b[4];
+
+    wsg_put_f32(b, (float)luaL_checknumber(L, 1));
+    api_bytes(L, b, 4);
+    return 1;
+}
+
+static int api_etob(lua_State *L)
+{
+    lua_Integer e = luaL_checkinteger(L, 1);
+    uint8_t b[2];
+
+    luaL_argcheck(L, e >= 0 && e <= 0xFFFF, 1, "not a status code");
+    wsg_put_u16(b, (uint16_t)e);
+    api_bytes(L, b, 2);
+    return 1;
+}
+
+static int api_frexp(lua_State *L)
+{
+    int e;
+    double m = frexp(luaL_checknumber(L, 1), &e);
+
+    lua_pushnumber(L, m);
+    lua_pushinteger(L, e);
+    return 2;
+}
+
+/* ---- cmd ---- */
+
+static int cmd_register(lua_State *L)
+{
+    struct wsg_script *h = wsg_script_of(L);
+    uint8_t id = api_byte(L, 1);
+
+    if (wsg_device_register(h->dev, id, 1) < 0)
+        return luaL_error(L,
+                          "cmd.register: %02Xh is a command of the "
+                          "firmware",
+                          id);
+    lua_pushboolean(L, 1);
+    return 1;
+}
+
+static int cmd_unregister(lua_State *L)
+{
+    struct wsg_script *h = wsg_script_of(L);
+    uint8_t id = api_byte(L, 1);
+
+    lua_pushboolean(L, wsg_device_register(h->dev, id, 0) == 0);
+    return 1;
+}
+
+static int cmd_read_k(lua_State *L, int status, lua_KContext ctx)
+{
+    (void)status;
+    (void)ctx;
+    return wsg_script_take(wsg_script_of(L), L);
+}
+
+static int cmd_read(lua_State *L)
+{
+    struct wsg_script *h = api_body(L, "cmd.read");
+
+    if (h->qlen > 0)
+        return wsg_script_take(h, L);
+    h->state = WSG_SCRIPT_READING;
+    return lua_yieldk(L, 0, 0, cmd_read_k);
+}
+
+static int cmd_send(lua_State *L)
+{
+    struct wsg_script *h = wsg_script_of(L);
+    uint8_t id = api_byte(L, 1);
+    struct wsg_session *s;
+    char err[128];
+    long n;
+    uint16_t crc;
+
+    n = wsg_script_flatten(L, 2, h->tx + WSG_HEADER_LEN, WSG_SCRIPT_SEND_MAX,
+                           err, sizeof err);
+    if (n < 0)
+        return luaL_error(L, "cmd.send: %s", err);
+    s = api_host(h);
+    if (!s) {
+        /* No host has talked to the gripper, or it has gone: the
+         * packet has nowhere to go, as on a gripper with no one
+         * connected. */
+        lua_pushboolean(L, 0);
+        return 1;
+    }
+    memset(h->tx, WSG_PREAMBLE_BYTE, WSG_PREAMBLE_LEN);
+    h->tx[3] = id;
+    wsg_put_u16(h->tx + 4, (uint16_t)n);
+    crc = wsg_crc_update(WSG_CRC_INIT, h->tx, WSG_HEADER_LEN + (size_t)n);
+    wsg_put_u16(h->tx + WSG_HEADER_LEN + n, crc);
+    wsg_device_send(h->dev, s, h->tx,
+                    WSG_HEADER_LEN + (size_t)n + WSG_CRC_LEN);
+    lua_pushboolean(L, 1);
+    return 1;
+}
+
+static int cmd_online(lua_State *L)
+{
+    lua_pushboolean(L, api_host(wsg_script_of(L)) != NULL);
+    return 1;
+}
+
+static int cmd_available(lua_State *L)
+{
+    lua_pushinteger(L, (lua_Integer)wsg_script_of(L)->qlen);
+    return 1;
+}
+
+/* The web page's names of the interfaces, from the session's peer. */
+static int cmd_interface(lua_State *L)
+{
+    static const struct {
+        const char *prefix, *name;
+    } names[] = {{"tcp ", "TCP/IP"},
+                 {"udp ", "UDP/IP"},
+                 {"can ", "CAN"},
+                 {"pty ", "Serial"}};
+    struct wsg_session *s = api_host(wsg_script_of(L));
+    size_t i;
+
+    for (i = 0; s && i < sizeof names / sizeof names[0]; i++)
+        if (strncmp(s->peer, names[i].prefix, strlen(names[i].prefix)) == 0) {
+            lua_pushstring(L, names[i].name);
+            return 1;
+        }
+    lua_pushnil(L);
+    return 1;
+}
+
+static const luaL_Reg cmd_lib[] = {
+    {"register", cmd_register},   {"unregister", cmd_unregister},
+    {"read", cmd_read},           {"send", cmd_send},
+    {"online", cmd_online},       {"available", cmd_available},
+    {"interface", cmd_interface}, {NULL, NULL}};
+
+/* ---- mc ---- */
+
+static int mc_position(lua_State *L)
+{
+    lua_pushnumber(L, wsg_axis_width(api_axis(L)));
+    return 1;
+}
+
+static int mc_speed(lua_State *L)
+{
+    struct wsg_script *h = wsg_script_of(L);
+    uint16_t st;
+    double v;
+
+    if (lua_isnoneornil(L, 1)) {
+        lua_pushnumber(L, wsg_axis_speed(api_axis(L)));
+        return 1;
+    }
+    v = api_number(L, 1);
+    st = wsg_device_motion_check(h->dev, 1);
+    if (st == WSG_E_SUCCESS)
+        st = wsg_axis_request_speed(api_axis(L), v, 0);
+    return api_motion(L, st);
+}
+
+static int mc_blocked(lua_State *L)
+{
+    lua_pushboolean(L, wsg_axis_pressing(api_axis(L)));
+    return 1;
+}
+
+static int mc_busy(lua_State *L)
+{
+    lua_pushboolean(L, wsg_axis_busy(api_axis(L)));
+    return 1;
+}
+
+static int mc_aforce(lua_State *L)
+{
+    lua_pushnumber(L, wsg_axis_force(api_axis(L)));
+    return 1;
+}
+
+static int mc_force(lua_State *L)
+{
+    struct wsg_axis *ax = api_axis(L);
+
+    if (!lua_isnoneornil(L, 1)) {
+        wsg_axis_set_force_limit(ax, api_number(L, 1));
+        wsg_axis_settle(ax);
+        return 0;
+    }
+    lua_pushnumber(L, wsg_axis_force(ax));
+    lua_pushnumber(L, wsg_axis_force_limit(ax));
+    return 2;
+}
+
+static int mc_stop(lua_State *L)
+{
+    struct wsg_axis *ax = api_axis(L);
+
+    wsg_axis_request_stop(ax);
+    wsg_axis_settle(ax);
+    return 0;
+}
+
+static int mc_move(lua_State *L)
+{
+    struct wsg_script *h = wsg_script_of(L);
+    double w = api_number(L, 1), v = api_number(L, 2);
+    lua_Integer flags = luaL_optinteger(L, 3, 0);
+    uint16_t st = wsg_device_motion_check(h->dev, 1);
+
+    if (st == WSG_E_SUCCESS)
+        st = wsg_axis_request_move(
+            api_axis(L),
+            (uint8_t)(flags & (WSG_MOVE_RELATIVE | WSG_MOVE_STOP_ON_BLOCK)), w,
+            v, 0);
+    return api_motion(L, st);
+}
+
+static int mc_homing(lua_State *L)
+{
+    struct wsg_script *h = wsg_script_of(L);
+    int dir = WSG_HOME_DEFAULT;
+    uint16_t st;
+
+    if (lua_isboolean(L, 1))
+        dir = lua_toboolean(L, 1) ? WSG_HOME_POSITIVE : WSG_HOME_NEGATIVE;
+    else if (!lua_isnoneornil(L, 1))
+        dir = (int)luaL_checkinteger(L, 1); /* as 20h: 0, 1, 2 */
+    st = wsg_device_motion_check(h->dev, 0);
+    if (st == WSG_E_SUCCESS)
+        st = wsg_axis_request_homing(api_axis(L), dir, 0);
+    return api_motion(L, st);
+}
+
+static int mc_pid(lua_State *L)
+{
+    struct wsg_script *h = wsg_script_of(L);
+    int i;
+
+    if (!lua_isnoneornil(L, 1))
+        for (i = 0; i < 3; i++)
+            h->pid[i] =
+                lua_isnoneornil(L, i + 1) ? h->pid[i] : api_number(L, i + 1);
+    for (i = 0; i < 3; i++)
+        lua_pushnumber(L, h->pid[i]);
+    return 3;
+}
+
+static const luaL_Reg mc_lib[] = {
+    {"position", mc_position}, {"speed", mc_speed},   {"blocked", mc_blocked},
+    {"busy", mc_busy},         {"aforce", mc_aforce}, {"force", mc_force},
+    {"stop", mc_stop},         {"move", mc_move},     {"homing", mc_homing},
+    {"pid", mc_pid},           {NULL, NULL}};
+
+/* ---- gripper, grasping ---- */
+
+static int gripper_state(lua_State *L)
+{
+    lua_pushinteger(L, wsg_device_flags(wsg_script_of(L)->dev));
+    return 1;
+}
+
+static const luaL_Reg gripper_lib[] = {{"state", gripper_state}, {NULL, NULL}};
+
+static int grasping_move(lua_State *L)
+{
+    struct wsg_script *h = wsg_script_of(L);
+    double w = api_number(L, 1), v = api_number(L, 2);
+    uint16_t st = wsg_device_motion_check(h->dev, 1);
+
+    if (st == WSG_E_SUCCESS)
+        st = wsg_axis_request_move(api_axis(L), 0, w, v, 0);
+    return api_motion(L, st);
+}
+
+static int grasping_grasp(lua_State *L)
+{
+    struct wsg_script *h = wsg_script_of(L);
+    double w = api_number(L, 1), v = api_number(L, 2);
+    uint16_t st = wsg_device_motion_check(h->dev, 1);
+
+    if (st == WSG_E_SUCCESS && !lua_isnoneornil(L, 3))
+        wsg_axis_set_force_limit(api_axis(L), api_number(L, 3));
+    if (st == WSG_E_SUCCESS)
+        st = wsg_axis_request_grasp(api_axis(L), w, v, 0);
+    return api_motion(L, st);
+}
+
+/* Clamp a part the fingers are at: close at most travel mm from where
+ * they are, with the force limit force; a part is held wherever the
+ * fingers meet it within that travel. */
+static int grasping_clamp(lua_State *L)
+{
+    struct wsg_script *h = wsg_script_of(L);
+    struct wsg_axis *ax = api_axis(L);
+    struct wsg_grasp_window win;
+    double travel = api_number(L, 1);
+    uint16_t st = wsg_device_motion_check(h->dev, 1);
+
+    luaL_argcheck(L, travel >= 0, 1, "travel must not be negative");
+    if (st == WSG_E_SUCCESS && !lua_isnoneornil(L, 2))
+        wsg_axis_set_force_limit(ax, api_number(L, 2));
+    win.travel = travel;
+    win.tolerance = 0.0;
+    if (st == WSG_E_SUCCESS)
+        st = wsg_axis_request_grasp_in(ax, wsg_axis_width(ax),
+                                       WSG_SCRIPT_CLAMP_SPEED, &win, 0);
+    return api_motion(L, st);
+}
+
+static int grasping_release(lua_State *L)
+{
+    struct wsg_script *h = wsg_script_of(L);
+    double w = api_number(L, 1), v = api_number(L, 2);
+    uint16_t st = wsg_device_motion_check(h->dev, 1);
+
+    if (st == WSG_E_SUCCESS)
+        st = wsg_axis_request_release(api_axis(L), w, v, 0);
+    return api_motion(L, st);
+}
+
+static int grasping_state(lua_State *L)
+{
+    lua_pushinteger(L, wsg_axis_grasp_state(api_axis(L)));
+    return 1;
+}
+
+static const luaL_Reg grasping_lib[] = {{"move", grasping_move},
+                                        {"grasp", grasping_grasp},
+                                        {"clamp", grasping_clamp},
+                                        {"stop_clamping", mc_stop},
+                                        {"release", grasping_release},
+                                        {"state", grasping_state},
+                                        {NULL, NULL}};
+
+/* ---- finger ---- */
+
+static int finger_index(lua_State *L)
+{
+    lua_Integer i = luaL_checkinteger(L, 1);
+
+    luaL_argcheck(L, i == 0 || i == 1, 1, "a finger is 0 or 1");
+    return (int)i;
+}
+
+static int finger_fmf(lua_State *L)
+{
+    return wsg_axis_cfg(api_axis(L))->force_sensor;
+}
+
+static int finger_type(lua_State *L)
+{
+    finger_index(L);
+    lua_pushstring(L, finger_fmf(L) ? "fmf" : "generic");
+    return 1;
+}
+
+/* A force measurement finger measures the force it grips with; a generic
+ * one has no data. */
+static int finger_data(lua_State *L)
+{
+    finger_index(L);
+    if (finger_fmf(L))
+        lua_pushnumber(L, wsg_axis_force(api_axis(L)));
+    else
+        lua_pushnil(L);
+    return 1;
+}
+
+static int finger_count(lua_State *L)
+{
+    lua_pushinteger(L, 2);
+    return 1;
+}
+
+static int finger_power(lua_State *L)
+{
+    struct wsg_script *h = wsg_script_of(L);
+    int i = finger_index(L);
+
+    if (!lua_isnoneornil(L, 2))
+        h->finger_power[i] = lua_toboolean(L, 2);
+    lua_pushboolean(L, h->finger_power[i]);
+    return 1;
+}
+
+/* The pass-through to custom finger electronics: the emulated fingers
+ * have none, so each answers nil and why, as Lua's io functions do. */
+static int finger_nothing(lua_State *L)
+{
+    int i = finger_index(L);
+
+    lua_pushnil(L);
+    lua_pushfstring(L, "finger %d: no serial or SPI interface on %s fingers",
+                    i, finger_fmf(L) ? "force measurement" : "generic");
+    return 2;
+}
+
+static const luaL_Reg finger_lib[] = {{"type", finger_type},
+                                      {"data", finger_data},
+                                      {"count", finger_count},
+                                      {"power", finger_power},
+                                      {"interface", finger_nothing},
+                                      {"read", finger_nothing},
+                                      {"write", finger_nothing},
+                                      {"spi", finger_nothing},
+                                      {NULL, NULL}};
+
+/* ---- socket ---- */
+
+static int socket_gettime(lua_State *L)
+{
+    lua_pushnumber(L, (lua_Number)wsg_script_now(wsg_script_of(L)) / 1e6);
+    return 1;
+}
+
+static int socket_sleep(lua_State *L)
+{
+    double s = api_number(L, 1);
+
+    lua_settop(L, 0);
+    lua_pushnumber(L, s * 1000.0);
+    return api_sleep(L);
+}
+
+static const luaL_Reg socket_lib[] = {
+    {"gettime", socket_gettime}, {"sleep", socket_sleep}, {NULL, NULL}};
+
+static int open_socket(lua_State *L)
+{
+    luaL_newlib(L, socket_lib);
+    return 1;
+}
+
+/* ---- the state ---- */
+
+/* Lua's own libraries that a script gets; io, debug and the rest of os
+ * stay out. */
+static const luaL_Reg std_libs[] = {{LUA_GNAME, luaopen_base},
+                                    {LUA_LOADLIBNAME, luaopen_package},
+                                    {LUA_COLIBNAME, luaopen_coroutine},
+                                    {LUA_TABLIBNAME, luaopen_table},
+                                    {LUA_STRLIBNAME, luaopen_string},
+                                    {LUA_MATHLIBNAME, luaopen_math},
+                                    {LUA_UTF8LIBNAME, luaopen_utf8},
+                                    {LUA_OSLIBNAME, luaopen_os},
+                                    {NULL, NULL}};
+
+static void set_nil(lua_State *L, const char *table, const char *const *names)
+{
+    if (table)
+        lua_getglobal(L, table);
+    else
+        lua_pushglobaltable(L);
+    for (; *names; names++) {
+        lua_pushnil(L);
+        lua_setfield(L, -2, *names);
+    }
+    lua_pop(L, 1);
+}
+
+/* Run by the host in the fresh state, trusted: the compatibility names,
+ * load restricted to text, printf, and string.format with the integer
+ * conversions of Lua 5.1 and 5.2 ("%d" of 2.5 prints 2 there; Lua 5.4
+ * raises an error, which would stop scripts written for the gripper). */
+static const char prelude[] =
+    "local rawload, output = ...\n"
+    "local floor, ceil, mtype = math.floor, math.ceil, math.type\n"
+    "local pack, unpack, format = table.pack, table.unpack, string.format\n"
+    "load = function(chunk, name, mode, env)\n"
+    "  return rawload(chunk, name, 't', env)\n"
+    "end\n"
+    "loadstring = function(s, name) return rawload(s, name, 't') end\n"
+    "local function toint(v)\n"
+    "  if mtype(v) == 'float' and v == v and v > -2^63 and v < 2^63 then\n"
+    "    return v >= 0 and floor(v) or ceil(v)\n"
+    "  end\n"
+    "  return v\n"
+    "end\n"
+    "string.format = function(fmt, ...)\n"
+    "  local args, i = pack(...), 0\n"
+    "  for conv in tostring(fmt):gmatch('%%[-+ #0]*%d*%.?%d*([%a%%])') do\n"
+    "    if conv ~= '%' then\n"
+    "      i = i + 1\n"
+    "      if conv:find('[cdiouxX]') then args[i] = toint(args[i]) end\n"
+    "    end\n"
+    "  end\n"
+    "  return format(fmt, unpack(args, 1, args.n))\n"
+    "end\n"
+    "local sformat = string.format\n"
+    "printf = function(fmt, ...) output(sformat(fmt, ...)) end\n"
+    "unpack = table.unpack\n"
+    "table.getn = function(t) return #t end\n"
+    "table.maxn = function(t)\n"
+    "  local n = 0\n"
+    "  for k in pairs(t) do if mtype(k) and k > n then n = k end end\n"
+    "  return n\n"
+    "end\n"
+    "math.pow = function(x, y) return x ^ y end\n"
+    "math.mod = math.fmod\n"
+    "math.log10 = function(x) return math.log(x, 10) end\n"
+    "math.ldexp = function(m, e) return m * 2.0 ^ e end\n"
+    "math.atan2 = math.atan\n"
+    "math.cosh = function(x) return (math.exp(x) + math.exp(-x)) / 2 end\n"
+    "math.sinh = function(x) return (math.exp(x) - math.exp(-x)) / 2 end\n"
+    "math.tanh = function(x)\n"
+    "  if x > 20 then return 1.0 elseif x < -20 then return -1.0 end\n"
+    "  local a, b = math.exp(x), math.exp(-x)\n"
+    "  return (a - b) / (a + b)\n"
+    "end\n"
+    "string.gfind = string.gmatch\n"
+    "local M = 0xFFFFFFFF\n"
+    "local function u(x) return floor(x) & M end\n"
+    "local function fold(op, r, ...)\n"
+    "  for i = 1, select('#', ...) do r = op(r, u(select(i, ...))) end\n"
+    "  return r\n"
+    "end\n"
+    "local function lsh(x, n)\n"
+    "  if n <= -32 or n >= 32 then return 0 end\n"
+    "  if n < 0 then return u(x) >> -n end\n"
+    "  return (u(x) << n) & M\n"
+    "end\n"
+    "bit32 = {\n"
+    "  band = function(...) return fold(function(a, b) return a & b end, M,"
+    " ...) end,\n"
+    "  bor = function(...) return fold(function(a, b) return a | b end, 0,"
+    " ...) end,\n"
+    "  bxor = function(...) return fold(function(a, b) return a ~ b end, 0,"
+    " ...) end,\n"
+    "  bnot = function(x) return ~u(x) & M end,\n"
+    "  lshift = lsh,\n"
+    "  rshift = function(x, n) return lsh(x, -n) end,\n"
+    "  arshift = function(x, n)\n"
+    "    local v = u(x)\n"
+    "    if v >= 0x80000000 then v = v - 0x100000000 end\n"
+    "    if n >= 32 then return v < 0 and M or 0 end\n"
+    "    return floor(v / 2 ^ n) & M\n"
+    "  end,\n"
+    "  extract = function(n, f, w)\n"
+    "    w = w or 1\n"
+    "    return (u(n) >> f) & ((1 << w) - 1)\n"
+    "  end,\n"
+    "  replace = function(n, v, f, w)\n"
+    "    w = w or 1\n"
+    "    local m = ((1 << w) - 1) << f\n"
+    "    return ((u(n) & ~m) | ((u(v) << f) & m)) & M\n"
+    "  end,\n"
+    "  lrotate = function(x, n)\n"
+    "    n = n % 32\n"
+    "    return ((u(x) << n) | (u(x) >> (32 - n))) & M\n"
+    "  end,\n"
+    "}\n"
+    "bit32.btest = function(...) return bit32.band(...) ~= 0 end\n"
+    "bit32.rrotate = function(x, n) return bit32.lrotate(x, -n) end\n";
+
+void wsg_script_open_api(lua_State *L, struct wsg_script *h)
+{
+    static const char *const base_out[] = {"dofile", "loadfile", NULL};
+    static const char *const os_out[] = {"execute",   "exit",   "getenv",
+                                         "remove",    "rename", "tmpname",
+                                         "setlocale", NULL};
+    static const char *const package_out[] = {"loadlib", "searchpath", NULL};
+    static const struct {
+        const char *name;
+        int value;
+    } statuses[] = {
+#define WSG_SCRIPT_STATUS_(v, name) {#name, v},
+        WSG_SCHEMA_STATUSES(WSG_SCRIPT_STATUS_)
+#undef WSG_SCRIPT_STATUS_
+    };
+    const luaL_Reg *lib;
+    size_t i;
+
+    for (lib = std_libs; lib->func; lib++) {
+        luaL_requiref(L, lib->name, lib->func, 1);
+        lua_pop(L, 1);
+    }
+    set_nil(L, NULL, base_out);
+    set_nil(L, LUA_OSLIBNAME, os_out);
+    set_nil(L, LUA_LOADLIBNAME, package_out);
+    /* require: modules from the script's directory, Lua text only. */
+    lua_getglobal(L, LUA_LOADLIBNAME);
+    lua_pushfstring(L, "%s/?.lua", h->dir);
+    lua_setfield(L, -2, "path");
+    lua_pushliteral(L, "");
+    lua_setfield(L, -2, "cpath");
+    lua_getfield(L, -1, "searchers");
+    lua_pushnil(L);
+    lua_rawseti(L, -2, 4);
+    lua_pushnil(L);
+    lua_rawseti(L, -2, 3);
+    lua_pop(L, 1);
+    luaL_getsubtable(L, -1, "preload");
+    lua_pushcfunction(L, open_socket);
+    lua_setfield(L, -2, "socket");
+    lua_pop(L, 2);
+
+    lua_register(L, "print", api_print);
+    lua_register(L, "sleep", api_sleep);
+    lua_register(L, "bton", api_bton);
+    lua_register(L, "ntob", api_ntob);
+    lua_register(L, "etob", api_etob);
+    for (i = 0; i < sizeof statuses / sizeof statuses[0]; i++) {
+        lua_pushinteger(L, statuses[i].value);
+        lua_setglobal(L, statuses[i].name);
+    }
+    luaL_newlib(L, cmd_lib);
+    lua_setglobal(L, "cmd");
+    luaL_newlib(L, mc_lib);
+    lua_setglobal(L, "mc");
+    luaL_newlib(L, gripper_lib);
+    lua_setglobal(L, "gripper");
+    luaL_newlib(L, grasping_lib);
+    lua_setglobal(L, "grasping");
+    luaL_newlib(L, finger_lib);
+    lua_setglobal(L, "finger");
+    lua_getglobal(L, LUA_MATHLIBNAME);
+    lua_pushnumber(L, NAN);
+    lua_setfield(L, -2, "nan");
+    lua_pushcfunction(L, api_frexp);
+    lua_setfield(L, -2, "frexp");
+    lua_pop(L, 1);
+
+    /* The prelude gets the real load and the output, and keeps them to
+     * itself. */
+    if (luaL_loadbufferx(L, prelude, sizeof prelude - 1, "=prelude", "t") ==
+        LUA_OK) {
+        lua_getglobal(L, "load");
+        lua_pushcfunction(L, api_output);
+        lua_call(L, 2, 0);
+    } else {
+        lua_pop(L, 1);
+    }
+}

@@ -1,0 +1,435 @@
+/*
+ * The script host: one Lua state per script run, made fresh at each start
+ * and closed when the script ends, so nothing of one run leaks into the
+ * next. The script's body runs as a coroutine; the host resumes it when
+ * what it waits for has come (a packet, its time, the processor) and
+ * tells the owner, through wsg_script_next and the wake callback, what
+ * that is. The memory cap is the allocator's; preemption is a count hook
+ * that yields the body when its slice is used up.
+ */
+#define _GNU_SOURCE /* realpath */
+
+#include "script_impl.h"
+
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <lauxlib.h>
+
+/* The count hook runs every this many instructions. */
+#define WSG_SCRIPT_HOOK_COUNT 1000
+/* Slices a script may run where it cannot yield (inside a coroutine of its
+ * own, a metamethod called from C, a sort's comparison) before it is
+ * stopped: a few hundred milliseconds of a frozen loop at most. */
+#define WSG_SCRIPT_STUCK_MAX 300u
+/* Memory the host may use past the cap to report a failure. */
+#define WSG_SCRIPT_HEADROOM (256u << 10)
+/* The smallest cap: the libraries alone take some 100 KiB, and they are
+ * opened where a failed allocation could not be caught. */
+#define WSG_SCRIPT_MEMORY_MIN (1u << 20)
+
+uint64_t wsg_script_now(const struct wsg_script *h)
+{
+    return wsg_axis_time(wsg_device_axis_const(h->dev));
+}
+
+/* The allocator: every byte the state holds is counted against the cap,
+ * and an allocation past it fails as Lua expects ("not enough memory"). */
+static void *script_alloc(void *ud, void *ptr, size_t osize, size_t nsize)
+{
+    struct wsg_script *h = ud;
+    size_t old = ptr ? osize : 0;
+    void *p;
+
+    if (nsize == 0) {
+        free(ptr);
+        h->memory -= old;
+        return NULL;
+    }
+    if (nsize > old && h->memory + (nsize - old) > h->limit)
+        return NULL;
+    p = realloc(ptr, nsize);
+    if (!p)
+        return NULL;
+    h->memory = h->memory - old + nsize;
+    return p;
+}
+
+/* Preemption: the body yields when its slice is used up. Where it cannot
+ * (a coroutine of the script's own, whose resume would get the yield, or
+ * a call from C), it runs on, and a loop that never gets out is ended. */
+static void script_hook(lua_State *L, lua_Debug *ar)
+{
+    struct wsg_script *h = wsg_script_of(L);
+
+    (void)ar;
+    if (h->budget > WSG_SCRIPT_HOOK_COUNT) {
+        h->budget -= WSG_SCRIPT_HOOK_COUNT;
+        return;
+    }
+    h->budget = WSG_SCRIPT_SLICE;
+    if (L == h->co && lua_isyieldable(L)) {
+        h->state = WSG_SCRIPT_RUNNABLE;
+        h->preempted++;
+        lua_yield(L, 0);
+        return;
+    }
+    if (++h->stuck >= WSG_SCRIPT_STUCK_MAX)
+        luaL_error(L,
+                   "ran %u slices of %u instructions where it cannot be "
+                   "preempted (in a coroutine of its own or a callback): "
+                   "stopped",
+                   WSG_SCRIPT_STUCK_MAX, WSG_SCRIPT_SLICE);
+}
+
+void wsg_script_print(struct wsg_script *h, const char *text, size_t len)
+{
+    size_t i;
+
+    if (h->cfg.print && len > 0)
+        h->cfg.print(h->cfg.ctx, text, len);
+    /* Only the tail fits the ring. */
+    if (len > WSG_SCRIPT_OUTPUT_MAX) {
+        h->out_total += len - WSG_SCRIPT_OUTPUT_MAX;
+        text += len - WSG_SCRIPT_OUTPUT_MAX;
+        len = WSG_SCRIPT_OUTPUT_MAX;
+    }
+    for (i = 0; i < len; i++)
+        h->out[(h->out_total + i) % WSG_SCRIPT_OUTPUT_MAX] = text[i];
+    h->out_total += len;
+}
+
+uint64_t wsg_script_output(const struct wsg_script *h, uint64_t from,
+                           char *buf, size_t cap, size_t *n, uint64_t *end)
+{
+    uint64_t oldest = h->out_total > WSG_SCRIPT_OUTPUT_MAX
+                          ? h->out_total - WSG_SCRIPT_OUTPUT_MAX
+                          : 0;
+    size_t i = 0;
+
+    if (from < oldest)
+        from = oldest;
+    if (from > h->out_total)
+        from = h->out_total;
+    for (; i < cap && from + i < h->out_total; i++)
+        buf[i] = h->out[(from + i) % WSG_SCRIPT_OUTPUT_MAX];
+    *n = i;
+    *end = h->out_total;
+    return from;
+}
+
+/* The script is over: its IDs go back to the firmware (E_CMD_UNKNOWN),
+ * a speed-mode motion it left on stops (nothing drives it any more), and
+ * D19 clears; D20 tells whether it failed. */
+static void script_end(struct wsg_script *h, const char *error)
+{
+    struct wsg_axis *ax = wsg_device_axis(h->dev);
+
+    wsg_device_unregister_all(h->dev);
+    if (wsg_axis_speed_mode(ax)) {
+        wsg_axis_request_stop(ax);
+        wsg_axis_settle(ax);
+    }
+    if (h->L)
+        lua_close(h->L);
+    h->L = NULL;
+    h->co = NULL;
+    h->state = WSG_SCRIPT_STOPPED;
+    h->qlen = 0;
+    h->reply_tag = 0;
+    h->dev->ext_flags &= ~(uint32_t)WSG_SF_SCRIPT_RUNNING;
+    if (error) {
+        h->failed = 1;
+        snprintf(h->error, sizeof h->error, "%s", error);
+        h->dev->ext_flags |= WSG_SF_SCRIPT_FAILURE;
+    }
+}
+
+/* luaL_traceback in a protected call: it allocates, and an error outside
+ * one would end the process. */
+static int script_traceback(lua_State *L)
+{
+    luaL_traceback(L, lua_touserdata(L, 1), lua_touserdata(L, 2), 0);
+    return 1;
+}
+
+/* The error of a failed resume, with where it happened, to the output and
+ * the status; the first line is the status's error. */
+static void script_fail(struct wsg_script *h, int status)
+{
+    char msg[sizeof h->error];
+    const char *m, *tb;
+    size_t len;
+
+    if (status == LUA_ERRMEM)
+        snprintf(msg, sizeof msg, "not enough memory (limit %lu bytes)",
+                 (unsigned long)h->cfg.memory_max);
+    else if ((m = lua_tostring(h->co, -1)) != NULL)
+        snprintf(msg, sizeof msg, "%s", m);
+    else
+        snprintf(msg, sizeof msg, "error object is a %s value",
+                 luaL_typename(h->co, -1));
+    /* Room for the traceback past the cap: the state is closed next. */
+    h->limit = h->cfg.memory_max + WSG_SCRIPT_HEADROOM;
+    lua_pushcfunction(h->L, script_traceback);
+    lua_pushlightuserdata(h->L, h->co);
+    lua_pushlightuserdata(h->L, msg);
+    if (lua_pcall(h->L, 2, 1, 0) == LUA_OK &&
+        (tb = lua_tolstring(h->L, -1, &len)) != NULL) {
+        wsg_script_print(h, "error: ", 7);
+        wsg_script_print(h, tb, len);
+        wsg_script_print(h, "\n", 1);
+    }
+    script_end(h, msg);
+}
+
+/* Run the body until it waits, is preempted, ends or fails. nargs values
+ * on the body's stack are what the wait it was in returns. */
+static void script_resume(struct wsg_script *h, int nargs)
+{
+    int nres, st;
+
+    h->state = WSG_SCRIPT_RUNNING;
+    h->budget = WSG_SCRIPT_SLICE;
+    h->stuck = 0;
+    st = lua_resume(h->co, h->L, nargs, &nres);
+    if (st == LUA_YIELD) {
+        lua_pop(h->co, nres);
+        if (h->state == WSG_SCRIPT_RUNNING) {
+            /* A yield of the script's own (coroutine.yield in the body):
+             * nothing to wait for; it goes on at the next turn. */
+            h->state = WSG_SCRIPT_RUNNABLE;
+        }
+        if (h->state == WSG_SCRIPT_RUNNABLE)
+            h->cfg.wake(h->cfg.ctx);
+        return;
+    }
+    if (st == LUA_OK)
+        script_end(h, NULL);
+    else
+        script_fail(h, st);
+}
+
+int wsg_script_take(struct wsg_script *h, lua_State *L)
+{
+    struct wsg_script_packet *p;
+    uint16_t i;
+
+    if (h->qlen == 0)
+        return 0;
+    p = &h->queue[h->qhead];
+    h->qhead = (h->qhead + 1) % WSG_SCRIPT_QUEUE;
+    h->qlen--;
+    h->reply_tag = p->tag;
+    lua_pushinteger(L, p->id);
+    lua_createtable(L, p->len, 0);
+    for (i = 0; i < p->len; i++) {
+        lua_pushinteger(L, p->data[i]);
+        lua_rawseti(L, -2, i + 1);
+    }
+    return 2;
+}
+
+/* The device's hook: a packet with a registered ID. */
+static void script_packet(void *ctx, struct wsg_session *s,
+                          const struct wsg_frame *f)
+{
+    struct wsg_script *h = ctx;
+    struct wsg_script_packet *p;
+
+    if (!h->L || h->qlen == WSG_SCRIPT_QUEUE) {
+        uint8_t pkt[WSG_HEADER_LEN + 2 + WSG_CRC_LEN];
+        size_t n = wsg_frame_encode_reply(
+            pkt, sizeof pkt, f->id, h->L ? WSG_E_OVERRUN : WSG_E_CMD_UNKNOWN,
+            NULL, 0);
+
+        wsg_device_send(h->dev, s, pkt, n);
+        return;
+    }
+    p = &h->queue[(h->qhead + h->qlen) % WSG_SCRIPT_QUEUE];
+    p->tag = s->tag;
+    p->id = f->id;
+    p->len = f->len;
+    memcpy(p->data, f->payload, f->len);
+    h->qlen++;
+    /* cmd.read's continuation takes it, inside the body, where an
+     * allocation that fails is the script's error and not the daemon's. */
+    if (h->state == WSG_SCRIPT_READING)
+        script_resume(h, 0);
+}
+
+int wsg_script_new(struct wsg_script **out, struct wsg_device *d,
+                   const struct wsg_script_config *cfg)
+{
+    struct wsg_script *h = calloc(1, sizeof *h);
+
+    *out = NULL;
+    if (!h)
+        return -ENOMEM;
+    h->dev = d;
+    h->cfg = *cfg;
+    if (h->cfg.memory_max == 0)
+        h->cfg.memory_max = WSG_SCRIPT_MEMORY_DEFAULT;
+    if (h->cfg.memory_max < WSG_SCRIPT_MEMORY_MIN)
+        h->cfg.memory_max = WSG_SCRIPT_MEMORY_MIN;
+    d->user_cmd = script_packet;
+    d->user_ctx = h;
+    *out = h;
+    return 0;
+}
+
+void wsg_script_free(struct wsg_script *h)
+{
+    if (!h)
+        return;
+    if (h->L)
+        script_end(h, NULL);
+    if (h->dev->user_ctx == h) {
+        h->dev->user_cmd = NULL;
+        h->dev->user_ctx = NULL;
+    }
+    free(h->tx);
+    free(h);
+}
+
+/* Load the file as the body of a fresh state. 0, or -errno/-EINVAL with
+ * the reason in err (a compile error fails the script). */
+static int script_load(struct wsg_script *h, char *err, size_t errlen)
+{
+    int st;
+
+    h->memory = 0;
+    h->limit = h->cfg.memory_max;
+    h->L = lua_newstate(script_alloc, h);
+    if (!h->L) {
+        snprintf(err, errlen, "not enough memory for a Lua state");
+        return -ENOMEM;
+    }
+    *(struct wsg_script **)lua_getextraspace(h->L) = h;
+    wsg_script_open_api(h->L, h);
+    h->co = lua_newthread(h->L);
+    /* Kept in the registry so the collector leaves it while it runs. */
+    lua_setfield(h->L, LUA_REGISTRYINDEX, "wsg.body");
+    st = luaL_loadfilex(h->co, h->file, "t");
+    if (st != LUA_OK) {
+        const char *m = lua_tostring(h->co, -1);
+
+        snprintf(err, errlen, "%s", m ? m : "cannot load the script");
+        wsg_script_print(h, "error: ", 7);
+        wsg_script_print(h, err, strlen(err));
+        wsg_script_print(h, "\n", 1);
+        script_end(h, err);
+        return -EINVAL;
+    }
+    lua_sethook(h->co, script_hook, LUA_MASKCOUNT, WSG_SCRIPT_HOOK_COUNT);
+    return 0;
+}
+
+int wsg_script_start(struct wsg_script *h, const char *path, char *err,
+                     size_t errlen)
+{
+    char *slash;
+    FILE *f;
+    int r;
+
+    if (h->L) {
+        snprintf(err, errlen, "a script is running (%s): stop it first",
+                 h->file);
+        return -EBUSY;
+    }
+    if (!realpath(path, h->file) || !(f = fopen(h->file, "r"))) {
+        r = -errno;
+        snprintf(err, errlen, "%s: %s", path, strerror(errno));
+        h->file[0] = '\0';
+        return r;
+    }
+    fclose(f);
+    /* Its modules are beside it: the gripper's /user directory. */
+    snprintf(h->dir, sizeof h->dir, "%s", h->file);
+    slash = strrchr(h->dir, '/');
+    if (slash)
+        slash[slash == h->dir ? 1 : 0] = '\0';
+    if (!h->tx) {
+        h->tx = malloc(WSG_HEADER_LEN + WSG_SCRIPT_SEND_MAX + WSG_CRC_LEN);
+        if (!h->tx) {
+            snprintf(err, errlen, "not enough memory");
+            return -ENOMEM;
+        }
+    }
+    /* A new start clears D20 (and the old error). */
+    h->failed = 0;
+    h->error[0] = '\0';
+    h->dev->ext_flags &= ~(uint32_t)WSG_SF_SCRIPT_FAILURE;
+    h->pid[0] = 1.0;
+    h->pid[1] = h->pid[2] = 0.0;
+    h->finger_power[0] = h->finger_power[1] = 1;
+    h->qlen = 0;
+    h->reply_tag = 0;
+    h->dev->ext_flags |= WSG_SF_SCRIPT_RUNNING;
+    r = script_load(h, err, errlen);
+    if (r < 0) {
+        if (r != -EINVAL)
+            script_end(h, err);
+        return r;
+    }
+    script_resume(h, 0);
+    if (h->failed) {
+        snprintf(err, errlen, "%s", h->error);
+        return -EINVAL;
+    }
+    return 0;
+}
+
+int wsg_script_stop(struct wsg_script *h)
+{
+    if (!h->L)
+        return -ESRCH;
+    script_end(h, NULL);
+    return 0;
+}
+
+void wsg_script_status(const struct wsg_script *h,
+                       struct wsg_script_status *st)
+{
+    memset(st, 0, sizeof *st);
+    st->state = h->state;
+    st->running = h->L != NULL;
+    st->failed = h->failed;
+    st->error = h->error[0] ? h->error : NULL;
+    st->file = h->file[0] ? h->file : NULL;
+    st->memory = h->L ? h->memory : 0;
+    st->memory_max = h->cfg.memory_max;
+    st->wake_us = h->wake_us;
+    st->preempted = h->preempted;
+}
+
+size_t wsg_script_registered(const struct wsg_script *h, uint8_t *ids,
+                             size_t cap)
+{
+    size_t n = 0;
+    unsigned id;
+
+    for (id = 0; id < 256 && n < cap; id++)
+        if (wsg_device_registered(h->dev, (uint8_t)id))
+            ids[n++] = (uint8_t)id;
+    return n;
+}
+
+uint64_t wsg_script_next(const struct wsg_script *h)
+{
+    return h->state == WSG_SCRIPT_SLEEPING ? h->wake_us : UINT64_MAX;
+}
+
+void wsg_script_poll(struct wsg_script *h)
+{
+    if (h->state == WSG_SCRIPT_SLEEPING && wsg_script_now(h) >= h->wake_us)
+        script_resume(h, 0);
+}
+
+void wsg_script_run(struct wsg_script *h)
+{
+    if (h->state == WSG_SCRIPT_RUNNABLE)
+        script_resume(h, 0);
+}
