@@ -18,7 +18,10 @@
  * "flags=0x01(auto-update)", "grasp-state=4(HOLDING)") where the payload
  * fits it, else the raw payload as hex bytes "data=01 02 ...". A
  * received packet with a bad checksum shows "checksum-error", one with a
- * SIZE too large "oversize", instead of its parameters.
+ * SIZE too large "oversize", instead of its parameters. A packet with an ID
+ * a script registered is the script's own: its payload shows as hex, with
+ * no status. What a script prints shows as "HH:MM:SS.mmm t=SIM script
+ * print TEXT", a line per line it printed.
  */
 #ifndef WSG_DAEMON_LOG_H
 #define WSG_DAEMON_LOG_H
