@@ -472,6 +472,69 @@ static void test_disconnect(struct emu *e)
     emu_close(&c);
 }
 
+/* A script's own command over CAN (issue: IDs a script registers are
+ * delivered from every interface): the script, written to TMPDIR here so
+ * the test carries it into the VM, answers B0h with E_SUCCESS and the
+ * payload doubled; its answer goes out on id + 1 in frames like any. An
+ * ID it did not register stays E_CMD_UNKNOWN. */
+static void test_script(const char *exe, const char *iface)
+{
+    static const char lua[] =
+        "cmd.register(0xB0)\n"
+        "while true do\n"
+        "  local id, p = cmd.read()\n"
+        "  local out = {}\n"
+        "  for i = 1, #p do out[i] = (p[i] * 2) % 256 end\n"
+        "  cmd.send(id, etob(E_SUCCESS), cmd.interface(), out)\n"
+        "end\n";
+    static const uint8_t in[] = {1, 2, 3, 200, 5, 6, 7, 8, 9};
+    const char *tmp = getenv("TMPDIR");
+    char path[256], arg[64];
+    const char *args[] = {"--can", arg, "--script", path, NULL};
+    uint8_t pkt[WSG_FRAME_MAX];
+    struct answer a;
+    struct emu e;
+    FILE *f;
+    size_t i;
+    int tx, rx;
+
+    snprintf(path, sizeof path, "%s/integ_can_%ld.lua",
+             tmp && tmp[0] ? tmp : "/tmp", (long)getpid());
+    f = fopen(path, "w");
+    REQUIRE(f != NULL);
+    REQUIRE(fwrite(lua, 1, sizeof lua - 1, f) == sizeof lua - 1);
+    REQUIRE(fclose(f) == 0);
+    snprintf(arg, sizeof arg, "%s:0x321", iface);
+    REQUIRE(emu_start(&e, exe, args) == 0);
+    tx = emu_can_socket(iface, EMU_CAN_RX_NONE);
+    rx = emu_can_socket(iface, 0x322);
+    REQUIRE(tx >= 0 && rx >= 0);
+    REQUIRE(emu_can_send_packet(tx, 0x321, pkt,
+                                encode(pkt, 0xB0, in, sizeof in)) == 0);
+    if (CHECK_OK(read_answer(rx, 0x322, &a, EMU_REPLY_MS) == 0)) {
+        check_frames(&a);
+        CHECK_EQ(a.f.id, 0xB0);
+        CHECK_EQ(a.f.status, WSG_E_SUCCESS);
+        /* "CAN", then each byte doubled. */
+        CHECK_EQ(EMU_NPARAMS(&a.f), 3 + sizeof in);
+        if (EMU_NPARAMS(&a.f) == 3 + sizeof in) {
+            CHECK(memcmp(EMU_PARAMS(&a.f), "CAN", 3) == 0);
+            for (i = 0; i < sizeof in; i++)
+                CHECK_EQ(EMU_PARAMS(&a.f)[3 + i], (uint8_t)(in[i] * 2));
+        }
+    }
+    REQUIRE(emu_can_send_packet(tx, 0x321, pkt, encode(pkt, 0xB1, NULL, 0)) ==
+            0);
+    if (CHECK_OK(read_answer(rx, 0x322, &a, EMU_REPLY_MS) == 0)) {
+        CHECK_EQ(a.f.id, 0xB1);
+        CHECK_EQ(a.f.status, WSG_E_CMD_UNKNOWN);
+    }
+    close(tx);
+    close(rx);
+    CHECK_EQ(emu_stop(&e), 0);
+    unlink(path);
+}
+
 int main(int argc, char **argv)
 {
     const char *exe = emu_exe(argc, argv);
@@ -486,6 +549,7 @@ int main(int argc, char **argv)
     printf("on %s\n", iface);
     test_open_failures(exe);
     test_ids(exe, iface);
+    test_script(exe, iface);
 
     REQUIRE(emu_start_tp(&e, exe, &emu_can, NULL) == 0);
     printf("%s\n", e.line);
