@@ -247,7 +247,9 @@ stop_emu conf
 # but the CAN interface; the file system's and the network's are
 # overridden on the command line. The values must show in the gripper.
 check "the example config with every setting uncommented (but can) starts"
+# The example startup script is where the package puts it, here under P.
 sed -e 's/^#\([a-z-]* = \)/\1/' -e '/^can = /d' \
+    -e "s|^script = /usr/|script = $P/|" \
     "$P/$DOC/examples/wsgemu.conf" >"$S/all.conf"
 n=$(grep -c '^[a-z-]* = ' "$S/all.conf") || true
 [ "$n" -ge 20 ] || fail "only $n settings in the uncommented example"
@@ -266,6 +268,13 @@ ctl "$P/bin/wsgctl" "$(tcp_port)" -q tag
     { show "$S/ctl.out"; fail "the tag is not 'cell 4' from the config"; }
 ctl "$P/bin/wsgctl" "$(tcp_port)" info
 grep -q 'WSG 50' "$S/ctl.out" || { show "$S/ctl.out"; fail "not a WSG 50"; }
+check "the example startup script runs and answers B0h"
+ctl "$P/bin/wsgctl" "$(tcp_port)" state
+grep -q SF_SCRIPT_RUNNING "$S/ctl.out" ||
+    { show "$S/ctl.out"; fail "40h does not show SF_SCRIPT_RUNNING"; }
+ctl "$P/bin/wsgctl" "$(tcp_port)" raw 0xB0
+grep -q "B0h.*E_SUCCESS" "$S/ctl.out" ||
+    { show "$S/ctl.out"; fail "the script did not answer B0h"; }
 stop_emu all
 [ -s "$S/comm.log" ] || fail "the communication log is empty"
 
