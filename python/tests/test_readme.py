@@ -25,7 +25,8 @@ def test_client_example(wsgemu_binary, capsys):
 
 
 def test_fixture_examples(pytester, wsgemu_binary):
-    [code] = [b for b in _blocks("python") if "(wsgemu)" in b]
+    [code] = [b for b in _blocks("python")
+              if "(wsgemu)" in b and "wsgemu_script" not in b]
     [ini] = _blocks("ini")
     pytester.makepyfile(test_readme_example=code)
     # The block's first line is "# pytest.ini".
@@ -34,3 +35,17 @@ def test_fixture_examples(pytester, wsgemu_binary):
                                 "--wsgemu=" + wsgemu_binary)
     result.assert_outcomes(passed=code.count("\ndef test_"))
     assert code.count("\ndef test_") == 3
+
+
+def test_script_example(pytester, wsgemu_binary):
+    [code] = [b for b in _blocks("python") if "wsgemu_script" in b]
+    [lua] = _blocks("lua")
+    # The block's first line names the script's file.
+    name = lua.split("\n", 1)[0].split()[1].rstrip(":")
+    assert name == "scripts/echo.lua"
+    (pytester.path / "scripts").mkdir()
+    (pytester.path / name).write_text(lua)
+    pytester.makepyfile(test_readme_script=code)
+    result = pytester.runpytest("-p", "no:cacheprovider",
+                                "--wsgemu=" + wsgemu_binary)
+    result.assert_outcomes(passed=1)

@@ -2,7 +2,8 @@
 emulator's control channel, and a pytest plugin that runs the emulator.
 
 - ``Gripper``: the WSG command set over TCP or UDP in human units;
-- ``Control``: wsgemu's control channel (parts, faults, simulated time);
+- ``Control``: wsgemu's control channel (parts, faults, simulated time,
+  scripts on the gripper);
 - ``Emulator``: start and stop a wsgemu daemon on free ports;
 - the ``wsgemu`` pytest fixture (``wsgemu.plugin``), loaded automatically.
 """

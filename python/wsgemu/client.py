@@ -9,13 +9,15 @@ since a gripper whose TCP client closes without it goes into FAST STOP.
 
 ``Control`` speaks wsgemu's control channel: one line per command, one
 ``ok ...`` or ``error ...`` line per answer; it places parts and obstacles,
-raises faults and pauses and steps simulated time.
+raises faults, pauses and steps simulated time, and runs, stops and reads
+the Lua scripts on the gripper.
 
 Standard library only, so it runs wherever Python 3.9 or later does.
 """
 
 import enum
 import json
+import os
 import socket
 import struct
 import time
@@ -769,6 +771,12 @@ class Control:
         self.timeout = timeout
         self._sock = socket.create_connection(self.addr, timeout=timeout)
         self._buf = b""
+        #: Byte offset in the script's output where the last
+        #: script_output() or script_output_new() stopped reading.
+        self.script_output_end = 0
+        #: Bytes the last of them could not return: printed, but already
+        #: pushed out of the daemon's ring (it keeps the last 64 KiB).
+        self.script_output_lost = 0
 
     def __enter__(self) -> "Control":
         return self
@@ -795,7 +803,10 @@ class Control:
                 raise ConnectionError("the control channel was closed")
             self._buf += data
         line, _, self._buf = self._buf.partition(b"\n")
-        return line.decode("utf-8").rstrip("\r")
+        # A script's output and error come as the bytes it printed, which
+        # need not be UTF-8: kept as surrogates, so script_output() can
+        # have the exact bytes back.
+        return line.decode("utf-8", "surrogateescape").rstrip("\r")
 
     def command(self, line: str) -> str:
         """Send one command line; the text after ``ok`` (maybe empty), or
@@ -808,7 +819,7 @@ class Control:
         if word == "ok":
             return rest
         if word == "error":
-            raise ControlError(line, rest)
+            raise ControlError(line, _text(rest))
         raise ConnectionError("unexpected control answer %r" % answer)
 
     # The world between the fingers.
@@ -877,3 +888,81 @@ class Control:
         n, the one selected."""
         text = self.command("gripper" if n is None else "gripper %d" % n)
         return int(text.split()[1])  # "gripper N of M"
+
+    # Scripts on the gripper (the selected one of a fleet).
+
+    def script_run(self, path: Union[str, "os.PathLike[str]"]) -> str:
+        """Run the Lua script at path on the gripper. A relative path is
+        made absolute here, from this process's working directory (the
+        daemon would take it from its own). ControlError when the file
+        cannot be read, a script runs already (script_stop() first), or
+        the script fails before its first wait (its error in
+        ``.reason``). ValueError for a path with a blank or a line break,
+        which the channel's line cannot carry."""
+        path = os.path.abspath(os.fspath(path))
+        if any(ch.isspace() for ch in path):
+            raise ValueError("the control channel splits its lines at "
+                             "blanks: a script path cannot hold one: %r"
+                             % path)
+        return self.command("script run " + path)
+
+    def script_stop(self) -> bool:
+        """End the running script (its IDs are unregistered, a speed-mode
+        motion it left is stopped); False if none was running."""
+        return self.command("script stop") == "script stopped"
+
+    def script_status(self) -> dict:
+        """The script's state (parsed JSON): ``running``, ``failed``,
+        ``error`` (None or the message of the error that ended it),
+        ``file`` (the absolute path, None before any run), ``state``
+        ("reading", "sleeping", "runnable", "running" or "stopped"),
+        ``registered`` (the command IDs it took, as numbers),
+        ``memory``, ``memory_max`` (bytes) and ``preempted`` (how often
+        its time slice ran out)."""
+        status = json.loads(self.command("script status"))
+        for key in ("error", "file"):
+            if isinstance(status.get(key), str):
+                status[key] = _text(status[key])
+        return status
+
+    def script_output(self, from_: int = 0) -> str:
+        """What the script printed from byte offset from_ on, up to what
+        it had printed when this was called (the daemon answers at most
+        about 1 KiB a line, so this asks until it has it all). The daemon
+        keeps the last 64 KiB: bytes older than that are skipped and
+        counted in ``script_output_lost``. Decoded as UTF-8, a byte that
+        is not as U+FFFD. Afterwards ``script_output_end`` is the offset
+        after the text, where script_output_new() goes on."""
+        if from_ < 0:
+            raise ValueError("from_ is a byte offset, not %r" % (from_,))
+        data, lost, pos = bytearray(), 0, int(from_)
+        stop: Optional[int] = None
+        while True:
+            chunk = json.loads(self.command("script output %d" % pos))
+            lost += chunk["lost"]
+            data += chunk["text"].encode("utf-8", "surrogateescape")
+            if stop is None:
+                # What was there at the first answer: a script that
+                # prints on cannot keep this loop going.
+                stop = chunk["end"]
+            if chunk["next"] >= stop or chunk["next"] == chunk["from"]:
+                pos = chunk["next"]
+                break
+            pos = chunk["next"]
+        self.script_output_end = pos
+        self.script_output_lost = lost
+        return data.decode("utf-8", "replace")
+
+    def script_output_new(self) -> str:
+        """What the script printed since this client's last
+        script_output() or script_output_new() (all of it, the first
+        time): ``script_output(script_output_end)``. The offset is this
+        client's: after gripper(n) selects another gripper of a fleet,
+        start again with script_output()."""
+        return self.script_output(self.script_output_end)
+
+
+def _text(s: str) -> str:
+    """A string of the channel's JSON as readable text: bytes that were
+    not UTF-8 (kept as surrogates by Control._line) as U+FFFD."""
+    return s.encode("utf-8", "surrogateescape").decode("utf-8", "replace")

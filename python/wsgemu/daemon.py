@@ -1,12 +1,13 @@
 """Start and stop a wsgemu daemon from Python, for tests and scripts.
 
 ``Emulator`` runs the daemon on free loopback ports (``--tcp 127.0.0.1:0
---control 127.0.0.1:0`` plus any extra arguments), waits for the one
-``ready ...`` line it prints on stdout once every interface is open, and
-hands out connected clients. ``stop()`` ends it with SIGTERM, after which a
-healthy daemon exits 0; anything else (a crash, a sanitizer's abort) is
-reported with what the daemon wrote on stderr. The pytest fixture in
-``wsgemu.plugin`` is a thin layer over this class.
+--control 127.0.0.1:0`` plus any extra arguments, and ``--script`` for a
+startup script), waits for the one ``ready ...`` line it prints on stdout
+once every interface is open, and hands out connected clients. ``stop()``
+ends it with SIGTERM, after which a healthy daemon exits 0; anything else
+(a crash, a sanitizer's abort) is reported with what the daemon wrote on
+stderr. The pytest fixture in ``wsgemu.plugin`` is a thin layer over this
+class.
 """
 
 import os
@@ -18,7 +19,7 @@ import subprocess
 import tempfile
 import threading
 import time
-from typing import Dict, List, Optional, Sequence, Tuple
+from typing import Dict, List, Optional, Sequence, Tuple, Union
 
 from .client import Control, Gripper
 
@@ -76,14 +77,25 @@ class Emulator:
 
     ``gripper`` and ``control`` are clients connected on first use and
     closed by stop(); new_gripper() and new_control() connect more.
+
+    ``script``: a Lua script the daemon runs at its start (``--script``,
+    on every gripper of a fleet), its path made absolute here; None for
+    none. A script that cannot be read makes start() fail; one that fails
+    while it starts leaves the daemon running with SF_SCRIPT_FAILURE set
+    (``control.script_status()`` has its error).
     """
 
     def __init__(self, binary: Optional[str] = None,
                  args: Sequence[str] = (), ready_timeout: float = 10.0,
                  interfaces: Sequence[str] = ("--tcp", "127.0.0.1:0",
-                                              "--control", "127.0.0.1:0")):
+                                              "--control", "127.0.0.1:0"),
+                 script: Optional[Union[str, "os.PathLike[str]"]] = None):
         self.binary = find_binary(binary)
+        self.script = (None if script is None
+                       else os.path.abspath(os.fspath(script)))
         self.argv = [self.binary, *interfaces, *args]
+        if self.script is not None:
+            self.argv += ["--script", self.script]
         self.ready_timeout = ready_timeout
         self.process: Optional[subprocess.Popen] = None
         self.ready_line = ""

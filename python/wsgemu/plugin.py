@@ -24,12 +24,23 @@ path to test.) Extra daemon arguments: the ini option
 (class, then function), e.g. ``@pytest.mark.wsgemu_args("--model",
 "wsg32")``. ``wsgemu_ready_timeout`` (ini, seconds, default 10) bounds the
 wait for the ready line.
+
+A Lua script on the gripper from the start (the daemon's ``--script``):
+``pytest --wsgemu-script=PATH`` for every test (PATH relative to where
+pytest was started), or the ``wsgemu_script`` marker for a module, class
+or test, the nearest one winning, e.g.
+``@pytest.mark.wsgemu_script("scripts/pd.lua")`` (a relative path is
+relative to the directory of the test's file); ``wsgemu_script(None)``
+runs none. The fixture's ``script`` is the absolute path, or None. A
+script that fails as it starts fails the test's setup with its error (to
+test such a script, run it with ``control.script_run``).
 """
 
 import os
 
 import pytest
 
+from .client import ControlError
 from .daemon import DaemonError, Emulator, find_binary
 
 
@@ -39,6 +50,11 @@ def pytest_addoption(parser):
                     default=None,
                     help="the wsgemu daemon the wsgemu fixture runs "
                          "(default: $WSGEMU, else wsgemu on PATH)")
+    group.addoption("--wsgemu-script", dest="wsgemu_script", metavar="PATH",
+                    default=None,
+                    help="a Lua script every wsgemu daemon runs from its "
+                         "start (--script); the wsgemu_script marker "
+                         "overrides it")
     parser.addini("wsgemu_args", type="args", default=[],
                   help="extra arguments for every daemon the wsgemu "
                        "fixture starts")
@@ -52,10 +68,18 @@ def pytest_configure(config):
     if config.getoption("wsgemu_binary"):
         config.option.wsgemu_binary = os.path.abspath(
             config.getoption("wsgemu_binary"))
+    if config.getoption("wsgemu_script"):
+        config.option.wsgemu_script = os.path.abspath(
+            config.getoption("wsgemu_script"))
     config.addinivalue_line(
         "markers",
         "wsgemu_args(*args): extra command-line arguments for this test's "
         "wsgemu daemon, e.g. wsgemu_args('--model', 'wsg32')")
+    config.addinivalue_line(
+        "markers",
+        "wsgemu_script(path): the Lua script this test's wsgemu daemon runs "
+        "from its start (--script), relative to the test file's directory; "
+        "None: none")
 
 
 def daemon_args(node):
@@ -69,20 +93,59 @@ def daemon_args(node):
     return args
 
 
+def daemon_script(node):
+    """The startup script for node's daemon: the nearest wsgemu_script
+    marker's (a relative path taken from the directory of the test's
+    file), else --wsgemu-script, else None."""
+    marker = node.get_closest_marker("wsgemu_script")
+    if marker is None:
+        return node.config.getoption("wsgemu_script")
+    if len(marker.args) != 1 or marker.kwargs:
+        raise DaemonError("wsgemu_script takes one path (or None), not %r"
+                          % (marker.args,))
+    path = marker.args[0]
+    if path is None:
+        return None
+    # node.path from pytest 7 on; fspath before (and deprecated since).
+    where = getattr(node, "path", None) or node.fspath
+    return os.path.join(os.path.dirname(str(where)), os.fspath(path))
+
+
+def _script_failure(emu):
+    """The error of a startup script that failed as it started, or None.
+    Without it the test would see only E_CMD_UNKNOWN for the script's IDs;
+    the script's own error says what is wrong."""
+    if emu.script is None or emu.control_addr is None:
+        return None
+    status = emu.control.script_status()
+    if status["running"] or not status["failed"]:
+        return None
+    return "the startup script %s failed: %s" % (emu.script, status["error"])
+
+
 @pytest.fixture
 def wsgemu(request):
     """A wsgemu daemon for this test, stopped (and its exit status 0
     checked) at teardown. See the module's documentation."""
     config = request.config
     failure = None
+    emu = None
     try:
         binary = find_binary(config.getoption("wsgemu_binary"))
         emu = Emulator(binary, daemon_args(request.node),
                        ready_timeout=float(
-                           config.getini("wsgemu_ready_timeout")))
+                           config.getini("wsgemu_ready_timeout")),
+                       script=daemon_script(request.node))
         emu.start()
-    except DaemonError as e:
+        failure = _script_failure(emu)
+    except (DaemonError, ControlError, OSError) as e:
+        # OSError: the control channel failed (WsgTimeout is one too).
         failure = str(e)
+    if failure is not None and emu is not None and emu.running:
+        try:
+            emu.stop()
+        except DaemonError:
+            pass
     # Failed outside the except block, so the report shows the daemon's
     # error once, not chained to the DaemonError.
     if failure is not None:

@@ -20,6 +20,12 @@
  * - the 07h of wsgctl's close aborts another client's running motion
  *   (manual 3.1.2), while --control reads width and state through the
  *   control channel without touching it;
+ * - script through --control: run (an absolute path, and a relative one
+ *   made absolute from wsgctl's directory), the script answering its own
+ *   ID over TCP, status readable and as JSON (-q), output as printed
+ *   (escapes undone), stop; a missing file, a second run and a script
+ *   that fails are exit 1 with the emulator's reason, script without
+ *   --control or with a bad subcommand exit 2;
  * - at the end the gripper is not in FAST STOP: every wsgctl close over
  *   TCP was announced with 07h.
  *
@@ -427,6 +433,97 @@ static void test_control_read(struct env *v, struct emu *e)
     ctl_close(&k);
 }
 
+/* A file with this text; 0 or -1. */
+static int write_file(const char *path, const char *text)
+{
+    FILE *f = fopen(path, "w");
+    int ok;
+
+    if (!f)
+        return -1;
+    ok = fputs(text, f) >= 0;
+    return fclose(f) == 0 && ok ? 0 : -1;
+}
+
+#define CONTROL(v, addr, ...)                                                 \
+    ctl((v), "--control", (addr), __VA_ARGS__, (char *)NULL)
+
+/* A script that answers B0h with what it got, through wsgctl --control;
+ * the packets go over TCP. */
+static void test_script(struct env *v, struct emu *e)
+{
+    static const char echo[] = "cmd.register(0xB0)\n"
+                               "print(\"echo\\tready\")\n"
+                               "while true do\n"
+                               "  local id, payload = cmd.read()\n"
+                               "  printf(\"got %d bytes\\n\", #payload)\n"
+                               "  cmd.send(id, etob(E_SUCCESS), payload)\n"
+                               "end\n";
+    char dir[64] = "/tmp/wsgctl-script-XXXXXX", addr[64], path[128], bad[128],
+         missing[128], want[160], cmd[512];
+
+    REQUIRE(emu_field(e, "control", addr, sizeof addr) != NULL);
+    REQUIRE(mkdtemp(dir) != NULL);
+    snprintf(path, sizeof path, "%s/echo.lua", dir);
+    snprintf(bad, sizeof bad, "%s/bad.lua", dir);
+    snprintf(missing, sizeof missing, "%s/missing.lua", dir);
+    REQUIRE(write_file(path, echo) == 0);
+    REQUIRE(write_file(bad, "x = = 1\n") == 0);
+
+    /* Only the control channel runs scripts. */
+    CHECK_EQ(TCP(v, "script", "status"), 2);
+    CHECK(has(v->err, "script needs --control"));
+    CHECK_EQ(CONTROL(v, addr, "script", "start"), 2);
+    CHECK_EQ(CONTROL(v, addr, "script", "run"), 2);
+
+    CHECK_EQ(CONTROL(v, addr, "script", "status"), 0);
+    CHECK(has(v->out, "script not running\n") &&
+          has(v->out, "registered none\n"));
+    CHECK_EQ(CONTROL(v, addr, "script", "run", missing), 1);
+    CHECK(has(v->err, "missing.lua: No such file or directory"));
+    CHECK_EQ(CONTROL(v, addr, "script", "run", path), 0);
+    CHECK(!strcmp(v->out, ""));
+    CHECK_EQ(CONTROL(v, addr, "script", "run", path), 1);
+    CHECK(has(v->err, "stop it first"));
+    CHECK_EQ(CONTROL(v, addr, "script", "status"), 0);
+    snprintf(want, sizeof want, "file %s\n", path);
+    CHECK(!strncmp(v->out, "script running (reading)\n", 25) &&
+          has(v->out, want) && has(v->out, "registered B0h\n"));
+    CHECK_EQ(CONTROL(v, addr, "-q", "script", "status"), 0);
+    CHECK(!strncmp(v->out, "{\"running\":true,", 16) &&
+          has(v->out, "\"registered\":[176]") && count_lines(v->out) == 1);
+    /* The gripper answers B0h through the script. */
+    CHECK_EQ(TCP(v, "raw", "0xB0", "7", "8"), 0);
+    CHECK(has(v->out, "E_SUCCESS") && has(v->out, "07 08"));
+    CHECK_EQ(CONTROL(v, addr, "script", "output"), 0);
+    CHECK(!strcmp(v->out, "echo\tready\ngot 2 bytes\n"));
+    CHECK_EQ(CONTROL(v, addr, "script", "stop"), 0);
+    CHECK_EQ(CONTROL(v, addr, "script", "stop"), 0); /* none: no error */
+    CHECK_EQ(CONTROL(v, addr, "script", "status"), 0);
+    CHECK(has(v->out, "script not running\n"));
+
+    /* A relative path is wsgctl's, not the daemon's. */
+    snprintf(cmd, sizeof cmd,
+             "cd %s && \"$WSGCTL\" --control %s script run echo.lua && "
+             "\"$WSGCTL\" --control %s script status",
+             dir, addr, addr);
+    CHECK_EQ(shell(v, cmd), 0);
+    CHECK(has(v->out, want));
+    CHECK_EQ(CONTROL(v, addr, "script", "stop"), 0);
+
+    /* A script that fails as it starts: its error, and the state says
+     * so. */
+    CHECK_EQ(CONTROL(v, addr, "script", "run", bad), 1);
+    CHECK(has(v->err, "bad.lua:1: unexpected symbol near '='"));
+    CHECK_EQ(CONTROL(v, addr, "script", "status"), 0);
+    CHECK(!strncmp(v->out, "script failed\n", 14) && has(v->out, "error ") &&
+          has(v->out, "unexpected symbol"));
+
+    unlink(path);
+    unlink(bad);
+    rmdir(dir);
+}
+
 static void check_no_fast_stop(struct emu *e)
 {
     struct emu_client c;
@@ -492,6 +589,7 @@ int main(int argc, char **argv)
     test_watch(&v);
     test_udp_pty(&v);
     test_control_read(&v, &e);
+    test_script(&v, &e);
     check_no_fast_stop(&e);
 
     CHECK_EQ(emu_stop(&e), 0);

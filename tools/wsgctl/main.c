@@ -7,11 +7,13 @@
  * WSG Commander's command-editor syntax (raw) and decodes hex dumps of
  * packets (decode). It talks TCP, UDP or a serial line; over TCP it always
  * sends Disconnect Announcement (07h) before closing, so using it never puts
- * the gripper into FAST STOP. Exit statuses are documented in usage().
+ * the gripper into FAST STOP. Through an emulator's control channel it reads
+ * without touching the gripper and runs Lua scripts on it (script). Exit
+ * statuses are documented in usage().
  *
  * This file: the options and their arguments, the command table, usage()
  * and main. The link is link.c, the commands commands.c, watch.c,
- * decode.c and control.c; what they share, wsgctl.h.
+ * decode.c, control.c and script.c; what they share, wsgctl.h.
  */
 #define _GNU_SOURCE /* getaddrinfo, sigaction, localtime_r */
 
@@ -172,6 +174,11 @@ static const struct command commands[] = {
      "(32, 0x20), floats (150.0f), strings in double quotes inside one "
      "argument ('\"text\"'; a bare word is refused); prints the answer",
      "wsgctl raw 0x21 0x00 40.0f 100.0f"},
+    {"script", c_script, 1, 2, 1, "run FILE|stop|status|output",
+     "with --control only: run the Lua script FILE on the gripper (a "
+     "relative path is made absolute from here), stop it, show its state "
+     "(-q: the channel's JSON) or print what it printed",
+     "wsgctl --control 127.0.0.1:2000 script run pd.lua"},
     {"decode", c_decode, 0, 0, 0, "",
      "decode hex packets from stdin (spaces, commas, 0x, h suffix; "
      "any line split); exit 1 if a checksum is bad or a packet incomplete",
@@ -180,12 +187,12 @@ static const struct command commands[] = {
 #define NCOMMANDS (sizeof commands / sizeof commands[0])
 
 /* What --control can answer: readings the control channel's "state"
- * holds. */
+ * holds, and the scripts, which only the channel reaches. */
 static int control_readable(const struct command *cmd)
 {
     return cmd->run == c_state || cmd->run == c_width || cmd->run == c_speed ||
            cmd->run == c_force || cmd->run == c_temperature ||
-           cmd->run == c_stats;
+           cmd->run == c_stats || cmd->run == c_script;
 }
 
 /* A description, indented 6, in lines of at most 78 columns. */
@@ -236,7 +243,8 @@ static void usage(FILE *f)
             "without touching\n"
             "                         the gripper (no 07h, no session): "
             "safe while another\n"
-            "                         client moves it\n"
+            "                         client moves it; script runs "
+            "only here\n"
             "Options (anywhere; \"--\" ends them):\n"
             "  --timeout S            wait for an answer (through "
             "E_CMD_PENDING) up to S\n"
@@ -266,15 +274,20 @@ static void usage(FILE *f)
                "\"ID Name: STATUS\" and\n"
                "\"params (N): hex bytes\" for each answer (E_CMD_PENDING "
                "too), then the\n"
-               "decoded values of known IDs. Errors go to stderr with the "
-               "manual's names\n"
-               "(\"wsgctl: 25h Grasp: E_CMD_FAILED\").\n"
+               "decoded values of known IDs. script status prints named "
+               "values (-q: the\n"
+               "channel's JSON line), script output the script's text as "
+               "it printed it.\n"
+               "Errors go to stderr with the manual's names (\"wsgctl: 25h "
+               "Grasp:\n"
+               "E_CMD_FAILED\").\n"
                "\nExit status: 0 E_SUCCESS; 1 the gripper answered another "
                "status (decode:\n"
-               "a bad checksum or incomplete packet); 2 usage error; 3 "
-               "cannot connect,\n"
-               "I/O error or no answer within --timeout; 130 interrupted "
-               "(watch: 0).\n");
+               "a bad checksum or incomplete packet; script: the emulator "
+               "refused, its\n"
+               "reason on stderr); 2 usage error; 3 cannot connect, I/O "
+               "error or no\n"
+               "answer within --timeout; 130 interrupted (watch: 0).\n");
 }
 
 int main(int argc, char **argv)
@@ -372,8 +385,14 @@ int main(int argc, char **argv)
     }
     if (x.o.kind == LINK_CONTROL && cmd->conn && !control_readable(cmd)) {
         err("--control reads only (state, width, speed, force, temperature, "
-            "stats); %s needs the gripper's interface",
+            "stats) and runs scripts (script); %s needs the gripper's "
+            "interface",
             cmd->name);
+        return EXIT_USAGE;
+    }
+    if (x.o.kind != LINK_CONTROL && cmd->run == c_script) {
+        err("script needs --control HOST:PORT: scripts are run through "
+            "the emulator's control channel");
         return EXIT_USAGE;
     }
 

@@ -127,4 +127,8 @@ int c_decode(struct ctx *x, int argc, char **argv);
 int control_read(struct ctx *x, uint8_t id, const uint8_t *payload,
                  size_t len);
 
+/* ---- scripts on the gripper, through the control channel (script.c) ---- */
+
+int c_script(struct ctx *x, int argc, char **argv);
+
 #endif

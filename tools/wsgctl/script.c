@@ -1,0 +1,319 @@
+/*
+ * wsgctl script: the Lua scripts on the gripper, through the emulator's
+ * control channel (--control only: a real gripper has no such channel,
+ * its scripts are run from its web page). "script run FILE", "script
+ * stop", "script status" and "script output" each send the channel's
+ * line of the same name and print what it answers for people (status as
+ * named values, output as the text the script printed) or, with -q, for
+ * scripts. The channel's JSON is read here with just what its answers
+ * need: the daemon writes them, keys are unique and strings escape only
+ * what JSON requires.
+ */
+#define _GNU_SOURCE /* getcwd under -std=c99 */
+
+#include "wsgctl.h"
+
+#include <ctype.h>
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+/* The channel's answers are at most 2 KiB; room for a longer one. */
+#define SCRIPT_LINE_MAX 4096
+/* A script's path as it goes into "script run": realpath's bound. */
+#define SCRIPT_PATH_MAX 4096
+
+/* One command line to the channel and its answer. The text after "ok "
+ * into *rest and 0; an "error" answer is printed as the emulator's
+ * reason (exit 1: it refused, as a gripper answers an error status), a
+ * dead or silent channel as such (exit 3). */
+static int script_line(struct ctx *x, const char *cmd, char *line, size_t cap,
+                       const char **rest)
+{
+    int r = wsg_client_line(&x->c.l, cmd, line, cap, timeout_deadline(&x->o));
+
+    if (r == -EMSGSIZE) {
+        err("script: the line \"%s\" is too long for the control channel",
+            cmd);
+        return EXIT_USAGE;
+    }
+    if (r == 0) {
+        err("control channel: no answer to \"%s\"", cmd);
+        return EXIT_CONN;
+    }
+    if (r < 0) {
+        err("control channel: %s", r == -EPIPE ? "closed" : strerror(-r));
+        return r == -EINTR ? EXIT_INTERRUPTED : EXIT_CONN;
+    }
+    if (!strncmp(line, "ok", 2) && (line[2] == ' ' || line[2] == '\0')) {
+        *rest = line[2] ? line + 3 : line + 2;
+        return EXIT_OK;
+    }
+    if (!strncmp(line, "error ", 6)) {
+        err("%s", line + 6);
+        return EXIT_GRIPPER;
+    }
+    err("control channel: unexpected answer: %s", line);
+    return EXIT_CONN;
+}
+
+/* ---- reading the channel's JSON ---- */
+
+/* Where the value of "key" starts, or NULL. */
+static const char *json_at(const char *json, const char *key)
+{
+    char pat[40];
+    const char *p;
+
+    snprintf(pat, sizeof pat, "\"%s\":", key);
+    p = strstr(json, pat);
+    return p ? p + strlen(pat) : NULL;
+}
+
+static int hex_digit(int ch)
+{
+    if (ch >= '0' && ch <= '9')
+        return ch - '0';
+    ch = tolower(ch);
+    return ch >= 'a' && ch <= 'f' ? ch - 'a' + 10 : -1;
+}
+
+/* The string value of key, unescaped, into out (cut to cap, no
+ * terminator added: it may hold NULs), its length into *n. 1, 0 for
+ * null, -1 when it is neither. \uXXXX becomes UTF-8; the daemon writes
+ * it only for control bytes, which stay one byte. */
+static int json_str(const char *json, const char *key, char *out, size_t cap,
+                    size_t *n)
+{
+    const char *p = json_at(json, key);
+
+    *n = 0;
+    if (!p)
+        return -1;
+    if (!strncmp(p, "null", 4))
+        return 0;
+    if (*p++ != '"')
+        return -1;
+    while (*p && *p != '"') {
+        unsigned long u;
+        char ch = *p++;
+
+        if (ch == '\\') {
+            if (!*p)
+                return -1; /* a line cut inside an escape */
+            ch = *p++;
+            switch (ch) {
+            case 'n':
+                ch = '\n';
+                break;
+            case 't':
+                ch = '\t';
+                break;
+            case 'r':
+                ch = '\r';
+                break;
+            case 'b':
+                ch = '\b';
+                break;
+            case 'f':
+                ch = '\f';
+                break;
+            case '"':
+            case '\\':
+            case '/':
+                break;
+            case 'u':
+                u = 0;
+                for (int i = 0; i < 4; i++) {
+                    int d = hex_digit((unsigned char)*p);
+
+                    if (d < 0)
+                        return -1;
+                    u = u << 4 | (unsigned long)d;
+                    p++;
+                }
+                if (u < 0x80) {
+                    ch = (char)u;
+                    break;
+                }
+                if (u < 0x800) {
+                    if (*n + 2 <= cap) {
+                        out[(*n)++] = (char)(0xC0 | u >> 6);
+                        out[(*n)++] = (char)(0x80 | (u & 0x3F));
+                    }
+                } else if (*n + 3 <= cap) {
+                    out[(*n)++] = (char)(0xE0 | u >> 12);
+                    out[(*n)++] = (char)(0x80 | (u >> 6 & 0x3F));
+                    out[(*n)++] = (char)(0x80 | (u & 0x3F));
+                }
+                continue;
+            default:
+                return -1;
+            }
+        }
+        if (*n < cap)
+            out[(*n)++] = ch;
+    }
+    return *p == '"' ? 1 : -1;
+}
+
+static int json_true(const char *json, const char *key)
+{
+    const char *p = json_at(json, key);
+
+    return p && !strncmp(p, "true", 4);
+}
+
+/* ---- the subcommands ---- */
+
+/* FILE as the daemon gets it: absolute, since the daemon resolves a
+ * relative path from its own working directory, not from wsgctl's. */
+static int script_run(struct ctx *x, const char *file)
+{
+    char path[SCRIPT_PATH_MAX], cmd[SCRIPT_PATH_MAX + 16];
+    char line[SCRIPT_LINE_MAX];
+    const char *rest;
+
+    for (const char *p = file; *p; p++)
+        if (isspace((unsigned char)*p)) {
+            /* The channel splits its lines at blanks. */
+            err("script run: a path with a blank cannot go through the "
+                "control channel: \"%s\"",
+                file);
+            return EXIT_USAGE;
+        }
+    if (file[0] == '/') {
+        snprintf(path, sizeof path, "%s", file);
+    } else {
+        char cwd[SCRIPT_PATH_MAX];
+
+        if (!getcwd(cwd, sizeof cwd)) {
+            err("script run: the working directory: %s", strerror(errno));
+            return EXIT_USAGE;
+        }
+        if ((size_t)snprintf(path, sizeof path, "%s/%s", cwd, file) >=
+            sizeof path) {
+            err("script run: path too long: \"%s\"", file);
+            return EXIT_USAGE;
+        }
+    }
+    snprintf(cmd, sizeof cmd, "script run %s", path);
+    return script_line(x, cmd, line, sizeof line, &rest);
+}
+
+static int script_stop(struct ctx *x)
+{
+    char line[SCRIPT_LINE_MAX];
+    const char *rest;
+
+    /* Not running is no error: afterwards none runs, as asked. */
+    return script_line(x, "script stop", line, sizeof line, &rest);
+}
+
+static int script_status(struct ctx *x)
+{
+    char line[SCRIPT_LINE_MAX], text[SCRIPT_LINE_MAX];
+    const char *json, *p;
+    double memory, memory_max, preempted;
+    size_t n;
+    int rc = script_line(x, "script status", line, sizeof line, &json);
+
+    if (rc)
+        return rc;
+    if (x->o.quiet) {
+        puts(json);
+        return EXIT_OK;
+    }
+    if (json_str(json, "state", text, sizeof text - 1, &n) != 1 ||
+        wsg_json_num(json, "memory", &memory) ||
+        wsg_json_num(json, "memory_max", &memory_max) ||
+        wsg_json_num(json, "preempted", &preempted) ||
+        !(p = json_at(json, "registered")) || *p != '[') {
+        err("control channel: unexpected script status: %s", json);
+        return EXIT_CONN;
+    }
+    text[n] = '\0';
+    if (json_true(json, "running"))
+        printf("script running (%s)\n", text);
+    else
+        printf("script %s\n",
+               json_true(json, "failed") ? "failed" : "not running");
+    if (json_str(json, "file", text, sizeof text - 1, &n) == 1)
+        printf("file %.*s\n", (int)n, text);
+    if (json_str(json, "error", text, sizeof text - 1, &n) == 1)
+        printf("error %.*s\n", (int)n, text);
+    /* "[176,177]" as the IDs are written everywhere else: "B0h B1h". */
+    fputs("registered", stdout);
+    if (p[1] == ']')
+        fputs(" none", stdout);
+    for (p++; *p && *p != ']';) {
+        char *end;
+        unsigned long id = strtoul(p, &end, 10);
+
+        if (end == p)
+            break;
+        printf(" %02lXh", id);
+        p = *end == ',' ? end + 1 : end;
+    }
+    putchar('\n');
+    printf("memory %.0f of %.0f bytes\n", memory, memory_max);
+    printf("preempted %.0f\n", preempted);
+    return EXIT_OK;
+}
+
+/* Everything the emulator still holds, as printed, in as many answers as
+ * it takes; up to the end of the first answer, so a script that prints on
+ * does not keep wsgctl reading. */
+static int script_output(struct ctx *x)
+{
+    char line[SCRIPT_LINE_MAX], text[SCRIPT_LINE_MAX], cmd[48];
+    double from = 0, next, end, stop = -1, lost, lost_total = 0;
+    const char *json;
+    size_t n;
+    int rc;
+
+    for (;;) {
+        snprintf(cmd, sizeof cmd, "script output %.0f", from);
+        rc = script_line(x, cmd, line, sizeof line, &json);
+        if (rc)
+            return rc;
+        if (json_str(json, "text", text, sizeof text, &n) != 1 ||
+            wsg_json_num(json, "lost", &lost) ||
+            wsg_json_num(json, "next", &next) ||
+            wsg_json_num(json, "end", &end)) {
+            err("control channel: unexpected script output: %s", json);
+            return EXIT_CONN;
+        }
+        fwrite(text, 1, n, stdout);
+        lost_total += lost;
+        if (stop < 0)
+            stop = end;
+        if (next >= stop || next <= from)
+            break;
+        from = next;
+    }
+    if (lost_total > 0 && !x->o.quiet)
+        err("script output: the first %.0f bytes are no longer kept (the "
+            "emulator keeps the last 64 KiB)",
+            lost_total);
+    return EXIT_OK;
+}
+
+int c_script(struct ctx *x, int argc, char **argv)
+{
+    const char *sub = argv[0];
+
+    if (!strcmp(sub, "run") && argc == 2)
+        return script_run(x, argv[1]);
+    if (argc == 1 && !strcmp(sub, "stop"))
+        return script_stop(x);
+    if (argc == 1 && !strcmp(sub, "status"))
+        return script_status(x);
+    if (argc == 1 && !strcmp(sub, "output"))
+        return script_output(x);
+    err("usage: wsgctl --control HOST:PORT script run FILE|stop|status|"
+        "output");
+    return EXIT_USAGE;
+}
