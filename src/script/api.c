@@ -204,11 +204,16 @@ static int cmd_register(lua_State *L)
     struct wsg_script *h = wsg_script_of(L);
     uint8_t id = api_byte(L, 1);
 
-    if (wsg_device_register(h->dev, id, 1) < 0)
-        return luaL_error(L,
-                          "cmd.register: %02Xh is a command of the "
-                          "firmware",
-                          id);
+    if (wsg_device_register(h->dev, id, 1) < 0) {
+        char msg[64];
+
+        /* Formatted here: lua_pushfstring knows no %02X and would raise
+         * its own error instead of this one. */
+        snprintf(msg, sizeof msg,
+                 "cmd.register: %02Xh is a command of the firmware",
+                 (unsigned)id);
+        return luaL_error(L, "%s", msg);
+    }
     lua_pushboolean(L, 1);
     return 1;
 }

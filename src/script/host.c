@@ -76,12 +76,14 @@ static void script_hook(lua_State *L, lua_Debug *ar)
         lua_yield(L, 0);
         return;
     }
+    /* %d: lua_pushfstring knows no %u, and would raise its own error
+     * in place of this one. */
     if (++h->stuck >= WSG_SCRIPT_STUCK_MAX)
         luaL_error(L,
-                   "ran %u slices of %u instructions where it cannot be "
+                   "ran %d slices of %d instructions where it cannot be "
                    "preempted (in a coroutine of its own or a callback): "
                    "stopped",
-                   WSG_SCRIPT_STUCK_MAX, WSG_SCRIPT_SLICE);
+                   (int)WSG_SCRIPT_STUCK_MAX, (int)WSG_SCRIPT_SLICE);
 }
 
 void wsg_script_print(struct wsg_script *h, const char *text, size_t len)
