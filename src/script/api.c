@@ -642,13 +642,17 @@ static void set_nil(lua_State *L, const char *table, const char *const *names)
 /* Run by the host in the fresh state, trusted: the compatibility names,
  * load restricted to text, printf, and string.format with the integer
  * conversions of Lua 5.1 and 5.2 ("%d" of 2.5 prints 2 there; Lua 5.4
- * raises an error, which would stop scripts written for the gripper). */
+ * raises an error, which would stop scripts written for the gripper).
+ * load passes its env on only when the script gave one: Lua's load tells
+ * an absent env from a nil one, and a nil one leaves the chunk without
+ * globals. The prelude's locals must not take the names of the globals it
+ * sets (table.unpack is tunpack here, so that unpack is the global). */
 static const char prelude[] =
     "local rawload, output = ...\n"
     "local floor, ceil, mtype = math.floor, math.ceil, math.type\n"
-    "local pack, unpack, format = table.pack, table.unpack, string.format\n"
-    "load = function(chunk, name, mode, env)\n"
-    "  return rawload(chunk, name, 't', env)\n"
+    "local pack, tunpack, format = table.pack, table.unpack, string.format\n"
+    "load = function(chunk, name, mode, ...)\n"
+    "  return rawload(chunk, name, 't', ...)\n"
     "end\n"
     "loadstring = function(s, name) return rawload(s, name, 't') end\n"
     "local function toint(v)\n"
@@ -665,7 +669,7 @@ static const char prelude[] =
     "      if conv:find('[cdiouxX]') then args[i] = toint(args[i]) end\n"
     "    end\n"
     "  end\n"
-    "  return format(fmt, unpack(args, 1, args.n))\n"
+    "  return format(fmt, tunpack(args, 1, args.n))\n"
     "end\n"
     "local sformat = string.format\n"
     "printf = function(fmt, ...) output(sformat(fmt, ...)) end\n"
