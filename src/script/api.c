@@ -612,6 +612,42 @@ static int open_socket(lua_State *L)
     return 1;
 }
 
+/* ---- require ---- */
+
+/* require's searcher for a script's modules: NAME.lua in the script's
+ * directory, each dot of NAME a subdirectory, as Lua text. It reads the
+ * directory the host keeps, not package.path, which the script can set
+ * (to "/etc/?.lua" or "../?.lua"); with the dots turned into slashes no
+ * name climbs out of the directory. Lua's own searcher would also load a
+ * precompiled chunk, which no sandbox can trust. */
+static int api_searcher(lua_State *L)
+{
+    struct wsg_script *h = wsg_script_of(L);
+    const char *name = luaL_checkstring(L, 1), *path, *c;
+    luaL_Buffer b;
+    FILE *f;
+
+    luaL_buffinit(L, &b);
+    luaL_addstring(&b, h->dir);
+    luaL_addchar(&b, '/');
+    for (c = name; *c; c++)
+        luaL_addchar(&b, *c == '.' ? '/' : *c);
+    luaL_addstring(&b, ".lua");
+    luaL_pushresult(&b);
+    path = lua_tostring(L, -1);
+    f = fopen(path, "r");
+    if (!f) {
+        lua_pushfstring(L, "no file '%s'", path);
+        return 1;
+    }
+    fclose(f);
+    if (luaL_loadfilex(L, path, "t") != LUA_OK)
+        return luaL_error(L, "error loading module '%s' from file '%s':\n\t%s",
+                          name, path, lua_tostring(L, -1));
+    lua_pushvalue(L, -2); /* the loader's second argument: the file */
+    return 2;
+}
+
 /* ---- the state ---- */
 
 /* Lua's own libraries that a script gets; io, debug and the rest of os
@@ -762,7 +798,9 @@ void wsg_script_open_api(lua_State *L, struct wsg_script *h)
     set_nil(L, NULL, base_out);
     set_nil(L, LUA_OSLIBNAME, os_out);
     set_nil(L, LUA_LOADLIBNAME, package_out);
-    /* require: modules from the script's directory, Lua text only. */
+    /* require: modules from the script's directory, Lua text only (the
+     * preload, then api_searcher). package.path tells where, for scripts
+     * that read it; changing it changes nothing. */
     lua_getglobal(L, LUA_LOADLIBNAME);
     lua_pushfstring(L, "%s/?.lua", h->dir);
     lua_setfield(L, -2, "path");
@@ -773,6 +811,8 @@ void wsg_script_open_api(lua_State *L, struct wsg_script *h)
     lua_rawseti(L, -2, 4);
     lua_pushnil(L);
     lua_rawseti(L, -2, 3);
+    lua_pushcfunction(L, api_searcher);
+    lua_rawseti(L, -2, 2);
     lua_pop(L, 1);
     luaL_getsubtable(L, -1, "preload");
     lua_pushcfunction(L, open_socket);
