@@ -187,6 +187,47 @@ static int api_etob(lua_State *L)
     return 1;
 }
 
+/* Lua's setmetatable, but a table is never marked for finalization, as
+ * Lua 5.1 did with tables: Lua runs finalizers with hooks off, so one
+ * that loops could never be preempted and would hold the daemon (at a
+ * collection, or in lua_close when the script is stopped). The __gc
+ * field stays in the metatable; the table only is not marked, because
+ * the field is absent at the moment the metatable is set. */
+static int api_setmetatable(lua_State *L)
+{
+    int t = lua_type(L, 2), gc;
+
+    luaL_checktype(L, 1, LUA_TTABLE);
+    luaL_argexpected(L, t == LUA_TNIL || t == LUA_TTABLE, 2, "nil or table");
+    if (luaL_getmetafield(L, 1, "__metatable") != LUA_TNIL)
+        return luaL_error(L, "cannot change a protected metatable");
+    lua_settop(L, 2);
+    /* Raw, as Lua looks for the field: no metamethod of the metatable's
+     * own can hide it or keep it from being taken out. */
+    if (t == LUA_TTABLE) {
+        lua_pushliteral(L, "__gc");
+        gc = lua_rawget(L, 2) != LUA_TNIL;
+    } else {
+        gc = 0;
+    }
+    if (!gc) {
+        lua_settop(L, 2);
+        lua_setmetatable(L, 1);
+        return 1;
+    }
+    /* Stack: t, mt, the finalizer. */
+    lua_pushliteral(L, "__gc");
+    lua_pushnil(L);
+    lua_rawset(L, 2);
+    lua_pushvalue(L, 2);
+    lua_setmetatable(L, 1);
+    lua_pushliteral(L, "__gc");
+    lua_insert(L, -2);
+    lua_rawset(L, 2);
+    lua_settop(L, 1);
+    return 1;
+}
+
 static int api_frexp(lua_State *L)
 {
     int e;
@@ -820,6 +861,7 @@ void wsg_script_open_api(lua_State *L, struct wsg_script *h)
     lua_pop(L, 2);
 
     lua_register(L, "print", api_print);
+    lua_register(L, "setmetatable", api_setmetatable);
     lua_register(L, "sleep", api_sleep);
     lua_register(L, "bton", api_bton);
     lua_register(L, "ntob", api_ntob);
