@@ -1,0 +1,762 @@
+/*
+ * integ_script: scripts on the gripper (src/script), seen from outside. The
+ * daemon runs the Lua scripts of tests/scripts (argv[3]); they call the
+ * script API and answer registered IDs with what they got, and this
+ * program compares that with what the command set and the control channel
+ * show. The scripts assert nothing themselves: every verdict is here.
+ * Simulated time is paused and stepped through the control channel
+ * wherever a script waits or the fingers move, so that every number is
+ * the same on every run, however loaded the machine.
+ *
+ * One program, one part per ctest (argv[2]; none: all of them):
+ * - api: every function of the API (api.lua): cmd.*, mc.*, gripper.state,
+ *   grasping.*, finger.* (generic fingers and --force-sensor on), bton,
+ *   ntob and etob to the byte, the E_* globals against the schema, print
+ *   and printf through "script output", math.nan, socket.gettime() and
+ *   socket.sleep in simulated time, the Lua 5.1 names, require beside the
+ *   script, cmd.read and sleep inside pcall, a normal end (D19 and D20
+ *   clear);
+ */
+#define _GNU_SOURCE /* mkdtemp */
+
+#include "check.h"
+#include "emu.h"
+#include "emu_ctl.h"
+#include "wsg/axis.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+/* The IDs api.lua answers. */
+enum {
+    ID_ECHO = 0xB0,
+    ID_CMD = 0xB1,
+    ID_SLEEP = 0xB2,
+    ID_REGISTER = 0xB3,
+    ID_SEND = 0xB4,
+    ID_CONVERT = 0xB5,
+    ID_STATUSES = 0xB6,
+    ID_PRINT = 0xB7,
+    ID_COMPAT = 0xB8,
+    ID_GRIPPER = 0xB9,
+    ID_FINGER = 0xBA,
+    ID_CLOCK = 0xBB,
+    ID_READINGS = 0xBC,
+    ID_OP = 0xBD,
+    ID_MODULES = 0xBE,
+    ID_END = 0xBF
+};
+
+/* BDh's operations (api.lua's ops). */
+enum {
+    OP_SPEED = 1,
+    OP_STOP,
+    OP_MOVE,
+    OP_HOMING,
+    OP_FORCE,
+    OP_PID,
+    OP_GRASP_MOVE,
+    OP_GRASP,
+    OP_CLAMP,
+    OP_STOP_CLAMPING,
+    OP_RELEASE
+};
+
+/* BCh's fields (api.lua), in order. */
+enum {
+    R_POSITION,
+    R_SPEED,
+    R_BLOCKED,
+    R_BUSY,
+    R_AFORCE,
+    R_FORCE,
+    R_LIMIT,
+    R_KP,
+    R_KI,
+    R_KD,
+    R_GRASP_STATE,
+    R_FLAGS
+};
+
+#define D19 WSG_SF_SCRIPT_RUNNING
+#define D20 WSG_SF_SCRIPT_FAILURE
+
+static const char *scripts; /* tests/scripts */
+
+/* Whole answers are compared as strings, so that a failure shows both. */
+#define CHECK_STR(a, b)                                                       \
+    do {                                                                      \
+        const char *got_ = (a), *want_ = (b);                                 \
+        check_count++;                                                        \
+        if (strcmp(got_, want_) != 0) {                                       \
+            check_failures++;                                                 \
+            fprintf(stderr,                                                   \
+                    "%s:%d: CHECK_STR failed: %s\n  got:  \"%s\"\n"           \
+                    "  want: \"%s\"\n",                                       \
+                    __FILE__, __LINE__, #a, got_, want_);                     \
+        }                                                                     \
+    } while (0)
+
+#define CHECK_HAS(a, part)                                                    \
+    do {                                                                      \
+        const char *got_ = (a), *part_ = (part);                              \
+        check_count++;                                                        \
+        if (!strstr(got_, part_)) {                                           \
+            check_failures++;                                                 \
+            fprintf(stderr,                                                   \
+                    "%s:%d: CHECK_HAS failed: %s\n  got:  \"%s\"\n"           \
+                    "  lacks: \"%s\"\n",                                      \
+                    __FILE__, __LINE__, #a, got_, part_);                     \
+        }                                                                     \
+    } while (0)
+
+/* ---- the script's answers ---- */
+
+/* The text of the script's answer to id (wire.lua): E_CMD_PENDING before
+ * each piece but the last, which comes with E_SUCCESS; the pieces joined
+ * into text. Waits up to timeout_ms for each piece. 0, or -1 (said). */
+static int take(struct emu_client *c, uint8_t id, char *text, size_t cap,
+                int timeout_ms)
+{
+    struct wsg_client_frame f;
+    size_t used = 0;
+
+    text[0] = '\0';
+    for (;;) {
+        size_t n;
+
+        if (emu_recv_id(c, id, &f, timeout_ms) != 1) {
+            fprintf(stderr, "no answer to %02Xh within %d ms\n", id,
+                    timeout_ms);
+            return -1;
+        }
+        if (f.status != WSG_E_SUCCESS && f.status != WSG_E_CMD_PENDING) {
+            fprintf(stderr, "%02Xh answered status %u\n", id, f.status);
+            return -1;
+        }
+        n = EMU_NPARAMS(&f);
+        if (n > cap - 1 - used)
+            n = cap - 1 - used;
+        memcpy(text + used, EMU_PARAMS(&f), n);
+        used += n;
+        text[used] = '\0';
+        if (f.status == WSG_E_SUCCESS)
+            return 0;
+    }
+}
+
+/* Send id with payload p and take the answer. */
+static int ask(struct emu_client *c, uint8_t id, const void *p, size_t n,
+               char *text, size_t cap)
+{
+    if (emu_send(c, id, p, n) != 0)
+        return -1;
+    return take(c, id, text, cap, EMU_REPLY_MS);
+}
+
+/* Field i of a '|'-joined answer (empty when there are fewer). */
+static const char *field(const char *text, int i)
+{
+    static char out[512]; /* the test is single-threaded */
+    const char *p = text, *end;
+    size_t n;
+
+    for (; i > 0 && p; i--) {
+        p = strchr(p, '|');
+        if (p)
+            p++;
+    }
+    if (!p)
+        return "";
+    end = strchr(p, '|');
+    n = end ? (size_t)(end - p) : strlen(p);
+    if (n >= sizeof out)
+        n = sizeof out - 1;
+    memcpy(out, p, n);
+    out[n] = '\0';
+    return out;
+}
+
+/* A number field; NaN when it is not one. wire.lua writes floats with 17
+ * digits, so strtod gives back the very double the script had. */
+static double field_num(const char *text, int i)
+{
+    const char *s = field(text, i);
+    char *end;
+    double v = strtod(s, &end);
+
+    return end != s && *end == '\0' ? v : NAN;
+}
+
+/* ---- the daemon ---- */
+
+static void script_file(char *buf, size_t cap, const char *name)
+{
+    snprintf(buf, cap, "%s/%s", scripts, name);
+}
+
+/* "script run" of a file of tests/scripts (or a path with a slash). */
+static const char *run_script(struct ctl *k, const char *name)
+{
+    char line[600], path[512];
+
+    if (strchr(name, '/'))
+        snprintf(path, sizeof path, "%s", name);
+    else
+        script_file(path, sizeof path, name);
+    snprintf(line, sizeof line, "script run %s", path);
+    return ctl_cmd(k, line);
+}
+
+#define RUN_OK(k, name)                                                       \
+    do {                                                                      \
+        const char *ans_ = run_script((k), (name));                           \
+        if (!ctl_is_ok(ans_))                                                 \
+            fprintf(stderr, "script run %s -> %s\n", (name), ans_);           \
+        REQUIRE(ctl_is_ok(ans_));                                             \
+    } while (0)
+
+/* "script status", the JSON after "ok ". */
+static const char *script_status(struct ctl *k)
+{
+    const char *ans = ctl_cmd(k, "script status");
+
+    return strncmp(ans, "ok ", 3) == 0 ? ans + 3 : "";
+}
+
+static long long ctl_time(struct ctl *k)
+{
+    return ctl_time_us(ctl_cmd(k, "time"));
+}
+
+static uint32_t flags_of(struct emu_client *c)
+{
+    uint32_t fl = 0;
+
+    CHECK(emu_get_flags(c, &fl) == 0);
+    return fl;
+}
+
+static double float_of(struct emu_client *c, uint8_t id)
+{
+    float v = NAN;
+
+    CHECK(emu_get_float(c, id, &v) == 0);
+    return v;
+}
+
+static int grasp_state_of(struct emu_client *c)
+{
+    struct wsg_client_frame f;
+
+    if (emu_request(c, WSG_CMD_GET_GRASP_STATE, NULL, 0, &f, EMU_REPLY_MS) !=
+            WSG_E_SUCCESS ||
+        EMU_NPARAMS(&f) < 1)
+        return -1;
+    return EMU_PARAMS(&f)[0];
+}
+
+/* The simulated time us as socket.gettime() gives it. */
+static double seconds(long long us)
+{
+    return (double)us / 1e6;
+}
+
+/* ---- api.lua's calls ---- */
+
+/* BDh: operation op with floats v[0..n-1] (and a byte after them for
+ * mc.move's flags); the answer's text into t. */
+static void op(struct emu_client *c, uint8_t opcode, const float *v, size_t n,
+               int tail, char *t, size_t cap)
+{
+    uint8_t p[32];
+    size_t len = 1, i;
+
+    p[0] = opcode;
+    for (i = 0; i < n; i++, len += 4)
+        wsg_put_f32(p + len, v[i]);
+    if (tail >= 0)
+        p[len++] = (uint8_t)tail;
+    REQUIRE(ask(c, ID_OP, p, len, t, cap) == 0);
+}
+
+/* The op's result: "1|STATUS" for the motion calls. */
+static void op_status(struct emu_client *c, uint8_t opcode, const float *v,
+                      size_t n, int tail, int want)
+{
+    char t[256], w[32];
+
+    op(c, opcode, v, n, tail, t, sizeof t);
+    snprintf(w, sizeof w, "1|%d", want);
+    CHECK_STR(t, w);
+}
+
+static void readings(struct emu_client *c, char *t, size_t cap)
+{
+    REQUIRE(ask(c, ID_READINGS, NULL, 0, t, cap) == 0);
+}
+
+/* mc.position() and mc.speed() against 43h and 44h (float32 on the wire),
+ * gripper.state() against 40h, mc.busy(); time is paused, so they are the
+ * same moment. */
+static void expect_readings(struct emu_client *c, const char *busy)
+{
+    char t[512];
+    double w = float_of(c, WSG_CMD_GET_WIDTH);
+    double v = float_of(c, WSG_CMD_GET_SPEED);
+    uint32_t fl = flags_of(c);
+
+    readings(c, t, sizeof t);
+    CHECK_NEAR(field_num(t, R_POSITION), w, 1e-4);
+    CHECK_NEAR(field_num(t, R_SPEED), v, 1e-4);
+    CHECK_STR(field(t, R_BUSY), busy);
+    CHECK_EQ((long long)field_num(t, R_FLAGS), fl);
+}
+
+/* ---- part api ---- */
+
+static void api_cmd(struct emu_client *c, struct ctl *k)
+{
+    static const uint8_t echo[4] = {1, 2, 3, 250};
+    static const uint8_t sent[] = {7, 1, 0, 'A', 'B',  1,   2,
+                                   3, 4, 0, 0,   0xC0, 0x3F};
+    uint8_t reg[2] = {1, 0xC5}, unreg[2] = {2, 0xC5}, dyn[3] = {9, 9, 9};
+    uint8_t ten = 10, home = WSG_HOME_POSITIVE, one = 1, two = 2;
+    struct wsg_client_frame f;
+    char t[1024];
+    long long t0;
+
+    /* cmd.online, cmd.available, cmd.interface */
+    REQUIRE(ask(c, ID_CMD, NULL, 0, t, sizeof t) == 0);
+    CHECK_STR(t, "true|0|TCP/IP");
+
+    /* cmd.read's table, sent back as it is by cmd.send */
+    CHECK_EQ(emu_request(c, ID_ECHO, echo, 4, &f, EMU_REPLY_MS),
+             WSG_E_SUCCESS);
+    CHECK_EQ(EMU_NPARAMS(&f), 4);
+    CHECK(memcmp(EMU_PARAMS(&f), echo, 4) == 0);
+    CHECK_EQ(emu_request(c, ID_ECHO, NULL, 0, &f, EMU_REPLY_MS),
+             WSG_E_SUCCESS);
+    CHECK_EQ(f.len, 2);
+
+    /* cmd.register and cmd.unregister of an ID of nobody's */
+    CHECK_EQ(emu_request(c, 0xC5, dyn, 3, NULL, EMU_REPLY_MS),
+             WSG_E_CMD_UNKNOWN);
+    REQUIRE(ask(c, ID_REGISTER, reg, 2, t, sizeof t) == 0);
+    CHECK_STR(t, "true|true");
+    REQUIRE(ask(c, 0xC5, dyn, 3, t, sizeof t) == 0);
+    CHECK_STR(t, "dyn|3");
+    CHECK_HAS(script_status(k),
+              "\"registered\":[161,176,177,178,179,180,181,182,"
+              "183,184,185,186,187,188,189,190,191,197]");
+    REQUIRE(ask(c, ID_REGISTER, unreg, 2, t, sizeof t) == 0);
+    CHECK_STR(t, "true");
+    CHECK_EQ(emu_request(c, 0xC5, dyn, 3, NULL, EMU_REPLY_MS),
+             WSG_E_CMD_UNKNOWN);
+
+    /* A command of the firmware is not the script's to take... */
+    reg[1] = unreg[1] = WSG_CMD_HOMING;
+    REQUIRE(ask(c, ID_REGISTER, reg, 2, t, sizeof t) == 0);
+    CHECK_STR(t, "false|cmd.register: 20h is a command of the firmware");
+    REQUIRE(ask(c, ID_REGISTER, unreg, 2, t, sizeof t) == 0);
+    CHECK_STR(t, "false");
+    /* ...and stays the firmware's: a homing, pending, then done. */
+    CHECK_EQ(emu_request(c, WSG_CMD_HOMING, &home, 1, NULL, EMU_REPLY_MS),
+             WSG_E_CMD_PENDING);
+    CMD_OK(k, "time step 3000");
+    CHECK_EQ(emu_recv_id(c, WSG_CMD_HOMING, &f, EMU_REPLY_MS), 1);
+    CHECK_EQ(f.status, WSG_E_SUCCESS);
+    CHECK(flags_of(c) & WSG_SF_REFERENCED);
+
+    /* cmd.send: a number in 0..255 a byte, booleans 0 and 1, a string its
+     * bytes, tables their elements (nested), ntob's four bytes, empty
+     * table and string nothing; then what each bad argument raised. */
+    CHECK_EQ(emu_request(c, ID_SEND, NULL, 0, &f, EMU_REPLY_MS),
+             WSG_E_SUCCESS);
+    CHECK_EQ(EMU_NPARAMS(&f), sizeof sent);
+    CHECK(memcmp(EMU_PARAMS(&f), sent, sizeof sent) == 0);
+    REQUIRE(take(c, ID_SEND, t, sizeof t, EMU_REPLY_MS) == 0);
+    CHECK_STR(t, "cmd.send: a number must be a whole byte in 0..255 (ntob(x) "
+                 "sends a float)|"
+                 "cmd.send: a number must be a whole byte in 0..255 (ntob(x) "
+                 "sends a float)|"
+                 "cmd.send: a number must be a whole byte in 0..255 (ntob(x) "
+                 "sends a float)|"
+                 "cmd.send: tables nested more than 5 deep|"
+                 "cmd.send: cannot send a function|"
+                 "cmd.send: cannot send a nil|"
+                 "cmd.send: payload longer than 65535 bytes");
+
+    /* Packets that come while the script sleeps (sleep inside pcall) wait
+     * in cmd.read's queue: cmd.available() counts them when it wakes, and
+     * they are read in the order they came. Nothing is answered before
+     * the time has been stepped. */
+    t0 = ctl_time(k);
+    REQUIRE(emu_send(c, ID_SLEEP, &ten, 1) == 0);
+    REQUIRE(emu_send(c, ID_ECHO, &one, 1) == 0);
+    REQUIRE(emu_send(c, ID_ECHO, &two, 1) == 0);
+    REQUIRE(emu_sync(c, EMU_REPLY_MS) == 0);
+    CHECK_EQ(emu_recv_id(c, ID_SLEEP, &f, EMU_QUIET_MS), 0);
+    CMD_OK(k, "time step 10");
+    REQUIRE(take(c, ID_SLEEP, t, sizeof t, EMU_REPLY_MS) == 0);
+    CHECK_STR(field(t, 0), "true");
+    CHECK_STR(field(t, 1), "2");
+    CHECK_EQ(field_num(t, 2), seconds(t0 + 10000));
+    CHECK_EQ(emu_recv(c, &f, EMU_REPLY_MS), 1);
+    CHECK(f.id == ID_ECHO && f.len == 3 && EMU_PARAMS(&f)[0] == 1);
+    CHECK_EQ(emu_recv(c, &f, EMU_REPLY_MS), 1);
+    CHECK(f.id == ID_ECHO && f.len == 3 && EMU_PARAMS(&f)[0] == 2);
+
+    /* socket.sleep(s): the same wait, in seconds */
+    t0 = ctl_time(k);
+    REQUIRE(emu_send(c, 0xA1, &ten, 1) == 0);
+    REQUIRE(emu_sync(c, EMU_REPLY_MS) == 0);
+    CMD_OK(k, "time step 10");
+    REQUIRE(take(c, 0xA1, t, sizeof t, EMU_REPLY_MS) == 0);
+    CHECK_EQ(field_num(t, 0), seconds(t0 + 10000));
+}
+
+/* The status codes, as the schema names them. */
+static const struct {
+    const char *name;
+    int value;
+} statuses[] = {
+#define STATUS_(v, name) {#name, v},
+    WSG_SCHEMA_STATUSES(STATUS_)
+#undef STATUS_
+};
+
+static void api_values(struct emu_client *c, struct ctl *k)
+{
+    static const uint8_t bytes[] = {0x0E, 0,    0x34, 0x12, 0, 0,
+                                    0xC0, 0x3F, 0,    0,    0, 0xC0};
+    struct wsg_client_frame f;
+    uint8_t x[4];
+    char t[2048], want[128], json[512];
+    const char *out;
+    uint32_t nan_bits;
+    unsigned long end;
+    size_t i, n;
+
+    /* bton, ntob, etob to the byte: 3.25 there and back, E_CMD_UNKNOWN,
+     * 0x1234, 1.5, -2 and a NaN (exponent all ones, mantissa not 0) */
+    wsg_put_f32(x, 3.25f);
+    CHECK_EQ(emu_request(c, ID_CONVERT, x, 4, &f, EMU_REPLY_MS),
+             WSG_E_SUCCESS);
+    REQUIRE(EMU_NPARAMS(&f) == 4 + sizeof bytes + 4);
+    CHECK(memcmp(EMU_PARAMS(&f), x, 4) == 0);
+    CHECK(memcmp(EMU_PARAMS(&f) + 4, bytes, sizeof bytes) == 0);
+    nan_bits = wsg_get_u32(EMU_PARAMS(&f) + 4 + sizeof bytes);
+    CHECK_EQ(nan_bits & 0x7F800000u, 0x7F800000u);
+    CHECK(nan_bits & 0x007FFFFFu);
+    REQUIRE(take(c, ID_CONVERT, t, sizeof t, EMU_REPLY_MS) == 0);
+    CHECK_STR(t, "3.25|false|bton: element 4 is not a byte|false|bad "
+                 "argument #1 to 'etob' (not a status code)|true|float|true");
+
+    /* E_*: every status code of the schema, with its value, and no other */
+    REQUIRE(ask(c, ID_STATUSES, NULL, 0, t, sizeof t) == 0);
+    for (i = 0, n = 1; t[i]; i++)
+        n += t[i] == '|';
+    CHECK_EQ(n, sizeof statuses / sizeof statuses[0]);
+    for (i = 0; i < sizeof statuses / sizeof statuses[0]; i++) {
+        char entry[64], framed[2100];
+
+        snprintf(entry, sizeof entry, "|%s=%d|", statuses[i].name,
+                 statuses[i].value);
+        snprintf(framed, sizeof framed, "|%s|", t);
+        CHECK_HAS(framed, entry);
+    }
+
+    /* print and printf, as "script output" has them from where it was */
+    out = ctl_cmd(k, "script output");
+    REQUIRE(strncmp(out, "ok ", 3) == 0);
+    end = (unsigned long)ctl_json_num(out, "end");
+    REQUIRE(ask(c, ID_PRINT, NULL, 0, t, sizeof t) == 0);
+    CHECK_STR(t, "7");
+    snprintf(want, sizeof want, "script output %lu", end);
+    out = ctl_cmd(k, want);
+    snprintf(json, sizeof json,
+             "{\"from\":%lu,\"lost\":0,\"text\":\"line\\t1\\t2.5\\tnil\\ttrue"
+             "\\n2|  3.1|s|ff\\n-2%%\\n\",",
+             end);
+    CHECK_HAS(out, json);
+
+    /* The names of Lua 5.1 and 5.2, and load of text */
+    REQUIRE(ask(c, ID_COMPAT, NULL, 0, t, sizeof t) == 0);
+    CHECK_STR(t, "6|3|3|1024|2|15|255|240|2147483648|1|4294967295|15|true|"
+                 "4294967295|1|3|8|0.5|10|true|true|42");
+
+    /* gripper.state() is 40h, with D19 set and D20 clear */
+    REQUIRE(ask(c, ID_GRIPPER, NULL, 0, t, sizeof t) == 0);
+    CHECK_EQ(atoll(t), flags_of(c));
+    CHECK_EQ(atoll(t) & (D19 | D20), D19);
+
+    /* socket.gettime() is the simulated time, exactly */
+    {
+        long long now = ctl_time(k);
+
+        REQUIRE(ask(c, ID_CLOCK, NULL, 0, t, sizeof t) == 0);
+        CHECK_EQ(field_num(t, 0), seconds(now));
+    }
+
+    /* require: wire from beside the script, socket from the host */
+    REQUIRE(ask(c, ID_MODULES, NULL, 0, t, sizeof t) == 0);
+    CHECK_STR(t, "true|wire|function|true");
+}
+
+static void api_motion(struct emu_client *c, struct ctl *k)
+{
+    char t[512];
+    double lim;
+
+    /* At rest, referenced at 110 mm by the firmware's homing. */
+    readings(c, t, sizeof t);
+    CHECK_NEAR(field_num(t, R_POSITION), 110.0, 1e-4);
+    CHECK_STR(field(t, R_SPEED), "0");
+    CHECK_STR(field(t, R_BLOCKED), "false");
+    CHECK_STR(field(t, R_BUSY), "false");
+    CHECK_STR(field(t, R_AFORCE), "0");
+    CHECK_STR(field(t, R_FORCE), "0");
+    lim = float_of(c, WSG_CMD_GET_FORCE_LIMIT);
+    CHECK_NEAR(field_num(t, R_LIMIT), lim, 1e-4);
+    CHECK_STR(field(t, R_KP), "1");
+    CHECK_STR(field(t, R_KI), "0");
+    CHECK_STR(field(t, R_KD), "0");
+    CHECK_STR(field(t, R_GRASP_STATE), "0");
+    expect_readings(c, "false");
+
+    /* mc.homing(false): to the negative end; mc.homing(true): back */
+    op_status(c, OP_HOMING, NULL, 0, 2, WSG_E_SUCCESS);
+    CHECK(flags_of(c) & WSG_SF_MOVING);
+    CMD_OK(k, "time step 100");
+    expect_readings(c, "true");
+    CMD_OK(k, "time step 3000");
+    CHECK_NEAR(float_of(c, WSG_CMD_GET_WIDTH), 0.0, 1e-3);
+    op_status(c, OP_HOMING, NULL, 0, 1, WSG_E_SUCCESS);
+    CMD_OK(k, "time step 3000");
+    CHECK_NEAR(float_of(c, WSG_CMD_GET_WIDTH), 110.0, 1e-3);
+    expect_readings(c, "false");
+
+    /* mc.move, absolute then relative (flag 1) */
+    op_status(c, OP_MOVE, (const float[]){30, 50}, 2, 0, WSG_E_SUCCESS);
+    CMD_OK(k, "time step 100");
+    CHECK(flags_of(c) & WSG_SF_MOVING);
+    expect_readings(c, "true");
+    CMD_OK(k, "time step 3000");
+    CHECK_NEAR(float_of(c, WSG_CMD_GET_WIDTH), 30.0, 1e-3);
+    op_status(c, OP_MOVE, (const float[]){-10, 50}, 2, 1, WSG_E_SUCCESS);
+    CMD_OK(k, "time step 3000");
+    CHECK_NEAR(float_of(c, WSG_CMD_GET_WIDTH), 20.0, 1e-3);
+    expect_readings(c, "false");
+
+    /* mc.stop in the middle of a movement */
+    op_status(c, OP_MOVE, (const float[]){60, 10}, 2, 0, WSG_E_SUCCESS);
+    CMD_OK(k, "time step 100");
+    op(c, OP_STOP, NULL, 0, -1, t, sizeof t);
+    CHECK_STR(t, "0");
+    CHECK_EQ(flags_of(c) & (WSG_SF_MOVING | WSG_SF_AXIS_STOPPED),
+             WSG_SF_AXIS_STOPPED);
+    readings(c, t, sizeof t);
+    CHECK_STR(field(t, R_SPEED), "0");
+    expect_readings(c, "false");
+
+    /* mc.force(limit): the limit 33h reads; mc.pid(kp, ki, kd) */
+    op(c, OP_FORCE, (const float[]){33}, 1, -1, t, sizeof t);
+    CHECK_STR(t, "0");
+    CHECK_NEAR(float_of(c, WSG_CMD_GET_FORCE_LIMIT), 33.0, 1e-4);
+    op(c, OP_PID, (const float[]){2, 0.5f, 0.25f}, 3, -1, t, sizeof t);
+    CHECK_STR(t, "3|2|0.5|0.25");
+    readings(c, t, sizeof t);
+    CHECK_STR(field(t, R_LIMIT), "33");
+    CHECK_STR(field(t, R_KP), "2");
+    CHECK_STR(field(t, R_KI), "0.5");
+    CHECK_STR(field(t, R_KD), "0.25");
+
+    /* grasping.move, then grasping.grasp of a part at 40 mm with 25 N:
+     * holding, pressing with the limit it set */
+    op_status(c, OP_GRASP_MOVE, (const float[]){70, 100}, 2, -1,
+              WSG_E_SUCCESS);
+    CMD_OK(k, "time step 3000");
+    CHECK_NEAR(float_of(c, WSG_CMD_GET_WIDTH), 70.0, 1e-3);
+    CMD_OK(k, "part 40");
+    op_status(c, OP_GRASP, (const float[]){40, 50, 25}, 3, -1, WSG_E_SUCCESS);
+    readings(c, t, sizeof t);
+    CHECK_STR(field(t, R_GRASP_STATE), "1"); /* GRASPING */
+    CMD_OK(k, "time step 3000");
+    CHECK_EQ(grasp_state_of(c), WSG_GS_HOLDING);
+    CHECK_NEAR(float_of(c, WSG_CMD_GET_FORCE_LIMIT), 25.0, 1e-4);
+    CHECK_NEAR(float_of(c, WSG_CMD_GET_FORCE), 25.0, 1e-3);
+    readings(c, t, sizeof t);
+    CHECK_STR(field(t, R_GRASP_STATE), "4"); /* HOLDING */
+    CHECK_STR(field(t, R_BLOCKED), "true");
+    CHECK_NEAR(field_num(t, R_AFORCE), 25.0, 1e-3);
+    CHECK_NEAR(field_num(t, R_FORCE), 25.0, 1e-3);
+    CHECK_STR(field(t, R_LIMIT), "25");
+
+    /* grasping.release: releasing at once, then idle at 60 mm */
+    op_status(c, OP_RELEASE, (const float[]){60, 50}, 2, -1, WSG_E_SUCCESS);
+    readings(c, t, sizeof t);
+    CHECK_STR(field(t, R_GRASP_STATE), "5"); /* RELEASING */
+    CMD_OK(k, "time step 3000");
+    CHECK_NEAR(float_of(c, WSG_CMD_GET_WIDTH), 60.0, 1e-3);
+    CHECK_EQ(grasp_state_of(c), WSG_GS_IDLE);
+
+    /* grasping.clamp: from just over the part, 5 mm of travel with 35 N;
+     * grasping.stop_clamping lets go */
+    op_status(c, OP_GRASP_MOVE, (const float[]){41, 20}, 2, -1, WSG_E_SUCCESS);
+    CMD_OK(k, "time step 3000");
+    op_status(c, OP_CLAMP, (const float[]){5, 35}, 2, -1, WSG_E_SUCCESS);
+    readings(c, t, sizeof t);
+    CHECK_STR(field(t, R_GRASP_STATE), "1");
+    CMD_OK(k, "time step 3000");
+    CHECK_EQ(grasp_state_of(c), WSG_GS_HOLDING);
+    CHECK_NEAR(float_of(c, WSG_CMD_GET_FORCE), 35.0, 1e-3);
+    CHECK_NEAR(float_of(c, WSG_CMD_GET_FORCE_LIMIT), 35.0, 1e-4);
+    {
+        double w = float_of(c, WSG_CMD_GET_WIDTH);
+
+        CHECK(w > 39.0 && w < 40.0);
+    }
+    op(c, OP_STOP_CLAMPING, NULL, 0, -1, t, sizeof t);
+    CHECK_STR(t, "0");
+    readings(c, t, sizeof t);
+    CHECK_STR(field(t, R_GRASP_STATE), "0");
+    CHECK_STR(field(t, R_BUSY), "false");
+    CHECK_EQ(grasp_state_of(c), WSG_GS_IDLE);
+    CMD_OK(k, "part none");
+    CMD_OK(k, "time step 1000");
+    expect_readings(c, "false");
+}
+
+/* finger.*: fmf with --force-sensor on (finger.data the force it grips
+ * with), generic without. */
+static void api_finger(struct emu_client *c, int fmf)
+{
+    static const char *const fmt =
+        "%s|%s|%s|%s|2|true|false|false|true|"
+        "nil:finger 0: no serial or SPI interface on %s fingers|"
+        "nil:finger 1: no serial or SPI interface on %s fingers|"
+        "nil:finger 0: no serial or SPI interface on %s fingers|"
+        "nil:finger 1: no serial or SPI interface on %s fingers|"
+        "false|";
+    const char *type = fmf ? "fmf" : "generic";
+    const char *kind = fmf ? "force measurement" : "generic";
+    char t[1024], want[1024];
+
+    /* At rest: an FMF finger measures 0 N, a generic one nothing. */
+    REQUIRE(ask(c, ID_FINGER, NULL, 0, t, sizeof t) == 0);
+    snprintf(want, sizeof want, fmt, type, type, fmf ? "0" : "nil",
+             fmf ? "0" : "nil", kind, kind, kind, kind);
+    /* The error, last, after where it was raised (api.lua:LINE:); the
+     * rest as a whole. */
+    CHECK_HAS(field(t, 14), ": bad argument #1 to 'type' (a finger is 0 "
+                            "or 1)");
+    if (strlen(t) > strlen(want))
+        t[strlen(want)] = '\0';
+    CHECK_STR(t, want);
+}
+
+/* An FMF finger's data while holding is the gripping force (45h). */
+static void api_finger_holding(struct emu_client *c, struct ctl *k)
+{
+    uint8_t home = WSG_HOME_POSITIVE, g[8];
+    struct wsg_client_frame f;
+    char t[1024];
+    double force;
+
+    CHECK_EQ(emu_request(c, WSG_CMD_HOMING, &home, 1, NULL, EMU_REPLY_MS),
+             WSG_E_CMD_PENDING);
+    CMD_OK(k, "time step 3000");
+    CHECK_EQ(emu_recv_id(c, WSG_CMD_HOMING, &f, EMU_REPLY_MS), 1);
+    CMD_OK(k, "part 40");
+    CHECK_EQ(emu_request(c, WSG_CMD_GRASP, g, emu_grasp_payload(g, 40, 50),
+                         NULL, EMU_REPLY_MS),
+             WSG_E_CMD_PENDING);
+    CMD_OK(k, "time step 3000");
+    CHECK_EQ(emu_recv_id(c, WSG_CMD_GRASP, &f, EMU_REPLY_MS), 1);
+    CHECK_EQ(f.status, WSG_E_SUCCESS);
+    force = float_of(c, WSG_CMD_GET_FORCE);
+    CHECK(force > 1.0);
+    REQUIRE(ask(c, ID_FINGER, NULL, 0, t, sizeof t) == 0);
+    CHECK_NEAR(field_num(t, 2), force, 1e-3);
+    CHECK_NEAR(field_num(t, 3), force, 1e-3);
+}
+
+static void part_api(const char *exe)
+{
+    static const char *const args[] = {"--tcp", "127.0.0.1:0", "--control",
+                                       "127.0.0.1:0", NULL};
+    static const char *const fmf_args[] = {
+        "--tcp",          "127.0.0.1:0", "--control", "127.0.0.1:0",
+        "--force-sensor", "on",          NULL};
+    struct emu e;
+    struct emu_client c;
+    struct ctl k;
+    char t[256];
+
+    REQUIRE(emu_start(&e, exe, args) == 0);
+    REQUIRE(ctl_open(&k, &e) == 0);
+    REQUIRE(emu_open(&c, &e, &emu_tcp) == 0);
+    CMD_OK(&k, "time pause");
+    /* Before any script, and D19/D20 clear. */
+    CHECK_EQ(emu_request(&c, ID_ECHO, NULL, 0, NULL, EMU_REPLY_MS),
+             WSG_E_CMD_UNKNOWN);
+    CHECK_EQ(flags_of(&c) & (D19 | D20), 0);
+    RUN_OK(&k, "api.lua");
+    CHECK_EQ(flags_of(&c) & (D19 | D20), D19);
+
+    api_cmd(&c, &k);
+    api_values(&c, &k);
+    api_motion(&c, &k);
+    api_finger(&c, 0);
+
+    /* The script's own end: D19 clear, D20 too, its IDs the firmware's */
+    REQUIRE(ask(&c, ID_END, NULL, 0, t, sizeof t) == 0);
+    CHECK_STR(t, "bye");
+    CHECK_EQ(flags_of(&c) & (D19 | D20), 0);
+    CHECK_HAS(script_status(&k), "{\"running\":false,\"failed\":false,"
+                                 "\"error\":null,");
+    CHECK_EQ(emu_request(&c, ID_ECHO, NULL, 0, NULL, EMU_REPLY_MS),
+             WSG_E_CMD_UNKNOWN);
+    CHECK_EQ(c.link.bad, 0);
+    emu_close(&c);
+    ctl_close(&k);
+    CHECK_EQ(emu_stop(&e), 0);
+
+    /* Force measurement fingers. */
+    REQUIRE(emu_start(&e, exe, fmf_args) == 0);
+    REQUIRE(ctl_open(&k, &e) == 0);
+    REQUIRE(emu_open(&c, &e, &emu_tcp) == 0);
+    CMD_OK(&k, "time pause");
+    RUN_OK(&k, "api.lua");
+    api_finger(&c, 1);
+    api_finger_holding(&c, &k);
+    emu_close(&c);
+    ctl_close(&k);
+    CHECK_EQ(emu_stop(&e), 0);
+}
+
+int main(int argc, char **argv)
+{
+    const char *exe = emu_exe(argc, argv);
+    const char *part = argc > 2 ? argv[2] : "all";
+    int all = strcmp(part, "all") == 0, ran = 0;
+
+    scripts = argc > 3 ? argv[3] : "tests/scripts";
+    if (access(scripts, R_OK) != 0) {
+        printf("SKIP: no scripts directory %s\n", scripts);
+        return 77;
+    }
+    if (all || strcmp(part, "api") == 0) {
+        part_api(exe);
+        ran++;
+    }
+    if (!ran) {
+        fprintf(stderr, "integ_script: unknown part \"%s\"\n", part);
+        return 2;
+    }
+    TEST_EXIT();
+}
