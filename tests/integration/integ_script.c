@@ -16,6 +16,13 @@
  *   socket.sleep in simulated time, the Lua 5.1 names, require beside the
  *   script, cmd.read and sleep inside pcall, a normal end (D19 and D20
  *   clear);
+ * - ifaces: registered IDs answered over TCP, UDP and the serial port,
+ *   unregistered ones E_CMD_UNKNOWN, packets the firmware refuses (too
+ *   long, after 07h) never reaching the script; cmd.send answers the peer
+ *   whose packet was read last (two TCP clients interleaved, and across
+ *   interfaces); packets that come
+ *   while the script sleeps are read in order, and one past the queue is
+ *   E_OVERRUN; after "script stop" the IDs are E_CMD_UNKNOWN again;
  */
 #define _GNU_SOURCE /* mkdtemp */
 
@@ -739,6 +746,212 @@ static void part_api(const char *exe)
     CHECK_EQ(emu_stop(&e), 0);
 }
 
+/* ---- part ifaces ---- */
+
+/* Every packet of client c parsed up to now (emu_sync), and what it got
+ * per ID since the counts were taken. */
+static unsigned seen_since(struct emu_client *c, const unsigned *before,
+                           uint8_t id)
+{
+    REQUIRE(emu_sync(c, EMU_REPLY_MS) == 0);
+    return c->link.seen[id] - before[id];
+}
+
+/* Two TCP clients, each with a sleep and an echo, interleaved: every
+ * answer goes to the client whose packet the script read last. */
+static void ifaces_two_clients(struct emu_client *a, struct emu_client *b,
+                               struct ctl *k)
+{
+    uint8_t ten = 10, pa = 0xA1, pb = 0xB1;
+    unsigned seen_a[256], seen_b[256];
+    struct wsg_client_frame f;
+    char t[256];
+    long long t0 = ctl_time(k);
+
+    REQUIRE(emu_sync(a, EMU_REPLY_MS) == 0);
+    REQUIRE(emu_sync(b, EMU_REPLY_MS) == 0);
+    memcpy(seen_a, a->link.seen, sizeof seen_a);
+    memcpy(seen_b, b->link.seen, sizeof seen_b);
+    /* Each sync makes sure the daemon has the packet before the next. */
+    REQUIRE(emu_send(a, ID_SLEEP, &ten, 1) == 0);
+    REQUIRE(emu_sync(a, EMU_REPLY_MS) == 0);
+    REQUIRE(emu_send(b, ID_SLEEP, &ten, 1) == 0);
+    REQUIRE(emu_sync(b, EMU_REPLY_MS) == 0);
+    REQUIRE(emu_send(a, ID_ECHO, &pa, 1) == 0);
+    REQUIRE(emu_sync(a, EMU_REPLY_MS) == 0);
+    REQUIRE(emu_send(b, ID_ECHO, &pb, 1) == 0);
+    REQUIRE(emu_sync(b, EMU_REPLY_MS) == 0);
+
+    /* A's sleep ends first: its answer to A, with three packets queued. */
+    CMD_OK(k, "time step 10");
+    REQUIRE(take(a, ID_SLEEP, t, sizeof t, EMU_REPLY_MS) == 0);
+    CHECK_STR(field(t, 1), "3");
+    CHECK_EQ(field_num(t, 2), seconds(t0 + 10000));
+    /* Then B's sleep, then both echoes, each to its sender. */
+    CMD_OK(k, "time step 10");
+    REQUIRE(take(b, ID_SLEEP, t, sizeof t, EMU_REPLY_MS) == 0);
+    CHECK_STR(field(t, 1), "2");
+    CHECK_EQ(field_num(t, 2), seconds(t0 + 20000));
+    CHECK_EQ(emu_recv_id(a, ID_ECHO, &f, EMU_REPLY_MS), 1);
+    CHECK(f.len == 3 && EMU_PARAMS(&f)[0] == pa);
+    CHECK_EQ(emu_recv_id(b, ID_ECHO, &f, EMU_REPLY_MS), 1);
+    CHECK(f.len == 3 && EMU_PARAMS(&f)[0] == pb);
+    /* ...and nothing went to the other one. */
+    CHECK_EQ(seen_since(a, seen_a, ID_SLEEP), 1);
+    CHECK_EQ(seen_since(a, seen_a, ID_ECHO), 1);
+    CHECK_EQ(seen_since(b, seen_b, ID_SLEEP), 1);
+    CHECK_EQ(seen_since(b, seen_b, ID_ECHO), 1);
+    emu_drop_kept(a);
+    emu_drop_kept(b);
+}
+
+/* The same across interfaces: the serial port's sleep, then TCP's and
+ * UDP's echoes queued behind it; each answer on its own interface. */
+static void ifaces_across(struct emu_client *c, struct ctl *k)
+{
+    uint8_t ten = 10, p[3] = {0x11, 0x22, 0x33};
+    unsigned seen[3][256];
+    struct wsg_client_frame f;
+    char t[256];
+    int i;
+
+    for (i = 0; i < 3; i++) {
+        REQUIRE(emu_sync(&c[i], EMU_REPLY_MS) == 0);
+        memcpy(seen[i], c[i].link.seen, sizeof seen[i]);
+    }
+    REQUIRE(emu_send(&c[2], ID_SLEEP, &ten, 1) == 0);
+    REQUIRE(emu_sync(&c[2], EMU_REPLY_MS) == 0);
+    for (i = 0; i < 3; i++) {
+        REQUIRE(emu_send(&c[i], ID_ECHO, &p[i], 1) == 0);
+        REQUIRE(emu_sync(&c[i], EMU_REPLY_MS) == 0);
+    }
+    CMD_OK(k, "time step 10");
+    REQUIRE(take(&c[2], ID_SLEEP, t, sizeof t, EMU_REPLY_MS) == 0);
+    CHECK_STR(field(t, 1), "3");
+    for (i = 0; i < 3; i++) {
+        CHECK_EQ(emu_recv_id(&c[i], ID_ECHO, &f, EMU_REPLY_MS), 1);
+        CHECK(f.len == 3 && EMU_PARAMS(&f)[0] == p[i]);
+        CHECK_EQ(seen_since(&c[i], seen[i], ID_ECHO), 1);
+        CHECK_EQ(seen_since(&c[i], seen[i], ID_SLEEP), i == 2);
+        emu_drop_kept(&c[i]);
+    }
+}
+
+/* Packets that come during a sleep are read in order; one more than the
+ * queue holds (64) is answered E_OVERRUN at once. */
+static void ifaces_queue(struct emu_client *c, struct ctl *k)
+{
+    enum { N = 65 };
+    uint8_t buf[N * 16], ten = 10;
+    struct wsg_client_frame f;
+    char t[256];
+    size_t used;
+    int i;
+
+    used = wsg_frame_encode(buf, sizeof buf, ID_SLEEP, &ten, 1);
+    for (i = 1; i <= N; i++) {
+        uint8_t b = (uint8_t)i;
+
+        used +=
+            wsg_frame_encode(buf + used, sizeof buf - used, ID_ECHO, &b, 1);
+    }
+    /* In one write: the daemon reads them in one go. */
+    REQUIRE(emu_send_raw(c, buf, used) == 0);
+    REQUIRE(emu_sync(c, EMU_REPLY_MS) == 0);
+    CHECK_EQ(emu_recv(c, &f, EMU_REPLY_MS), 1);
+    CHECK(f.id == ID_ECHO && f.status == WSG_E_OVERRUN && f.len == 2);
+    CMD_OK(k, "time step 10");
+    REQUIRE(take(c, ID_SLEEP, t, sizeof t, EMU_REPLY_MS) == 0);
+    CHECK_STR(field(t, 1), "64");
+    for (i = 1; i < N; i++) {
+        if (emu_recv(c, &f, EMU_REPLY_MS) != 1) {
+            CHECK(!"an echo is missing");
+            break;
+        }
+        CHECK(f.id == ID_ECHO && f.status == WSG_E_SUCCESS && f.len == 3);
+        CHECK_EQ(EMU_PARAMS(&f)[0], i);
+    }
+}
+
+static void part_ifaces(const char *exe)
+{
+    static const struct emu_transport *const tps[3] = {&emu_tcp, &emu_udp,
+                                                       &emu_pty};
+    static const char *const names[3] = {"TCP/IP", "UDP/IP", "Serial"};
+    static const char *const extra[] = {"--control", "127.0.0.1:0", NULL};
+    struct emu e;
+    struct emu_client c[3], b;
+    struct wsg_client_frame f;
+    struct ctl k;
+    char t[256], want[64];
+    int i;
+
+    REQUIRE(emu_start_multi(&e, exe, tps, 3, extra) == 0);
+    REQUIRE(ctl_open(&k, &e) == 0);
+    for (i = 0; i < 3; i++)
+        REQUIRE(emu_open(&c[i], &e, tps[i]) == 0);
+    REQUIRE(emu_open(&b, &e, &emu_tcp) == 0);
+    CMD_OK(&k, "time pause");
+    RUN_OK(&k, "api.lua");
+
+    /* Each interface: the script answers its registered IDs there, names
+     * the interface, and an ID nobody registered is E_CMD_UNKNOWN. */
+    for (i = 0; i < 3; i++) {
+        uint8_t p[3] = {(uint8_t)i, 0x55, 0xAA};
+
+        CHECK_EQ(emu_request(&c[i], ID_ECHO, p, 3, &f, EMU_REPLY_MS),
+                 WSG_E_SUCCESS);
+        CHECK(EMU_NPARAMS(&f) == 3 && memcmp(EMU_PARAMS(&f), p, 3) == 0);
+        REQUIRE(ask(&c[i], ID_CMD, NULL, 0, t, sizeof t) == 0);
+        snprintf(want, sizeof want, "true|0|%s", names[i]);
+        CHECK_STR(t, want);
+        CHECK_EQ(emu_request(&c[i], 0xC0, p, 3, NULL, EMU_REPLY_MS),
+                 WSG_E_CMD_UNKNOWN);
+    }
+
+    /* What the firmware refuses never reaches the script: a packet
+     * longer than any command (E_CMD_FORMAT_ERROR), and one after the
+     * Disconnect Announcement (E_ACCESS_DENIED). */
+    {
+        static uint8_t big[300];
+        struct emu_client d;
+
+        CHECK_EQ(
+            emu_request(&c[0], ID_ECHO, big, sizeof big, NULL, EMU_REPLY_MS),
+            WSG_E_CMD_FORMAT_ERROR);
+        REQUIRE(emu_open(&d, &e, &emu_tcp) == 0);
+        CHECK_EQ(
+            emu_request(&d, WSG_CMD_DISCONNECT, NULL, 0, NULL, EMU_REPLY_MS),
+            WSG_E_SUCCESS);
+        CHECK_EQ(emu_request(&d, ID_ECHO, NULL, 0, NULL, EMU_REPLY_MS),
+                 WSG_E_ACCESS_DENIED);
+        emu_close(&d);
+        REQUIRE(ask(&c[0], ID_CMD, NULL, 0, t, sizeof t) == 0);
+        CHECK_STR(t, "true|0|TCP/IP");
+    }
+
+    ifaces_two_clients(&c[0], &b, &k);
+    ifaces_across(c, &k);
+    ifaces_queue(&c[0], &k);
+
+    /* Stopped: the IDs are the firmware's again, unknown on every
+     * interface. */
+    CHECK(strcmp(ctl_cmd(&k, "script stop"), "ok script stopped") == 0);
+    for (i = 0; i < 3; i++) {
+        CHECK_EQ(emu_request(&c[i], ID_ECHO, NULL, 0, NULL, EMU_REPLY_MS),
+                 WSG_E_CMD_UNKNOWN);
+        CHECK_EQ(emu_request(&c[i], ID_CMD, NULL, 0, NULL, EMU_REPLY_MS),
+                 WSG_E_CMD_UNKNOWN);
+        CHECK_EQ(c[i].link.bad, 0);
+    }
+    CHECK_EQ(flags_of(&c[0]) & (D19 | D20), 0);
+    for (i = 0; i < 3; i++)
+        emu_close(&c[i]);
+    emu_close(&b);
+    ctl_close(&k);
+    CHECK_EQ(emu_stop(&e), 0);
+}
+
 int main(int argc, char **argv)
 {
     const char *exe = emu_exe(argc, argv);
@@ -752,6 +965,10 @@ int main(int argc, char **argv)
     }
     if (all || strcmp(part, "api") == 0) {
         part_api(exe);
+        ran++;
+    }
+    if (all || strcmp(part, "ifaces") == 0) {
+        part_ifaces(exe);
         ran++;
     }
     if (!ran) {
