@@ -23,6 +23,12 @@
  *   interfaces); packets that come
  *   while the script sleeps are read in order, and one past the queue is
  *   E_OVERRUN; after "script stop" the IDs are E_CMD_UNKNOWN again;
+ * - speed: speed mode from a script: mc.speed(-20) closes at 20 mm/s
+ *   (43h/44h/40h, 41h POSITIONING), blocked by a part it pushes with the
+ *   force limit (45h, mc.blocked()); mc.stop, FAST STOP, a host's Stop
+ *   and the script's end stop it, a new mc.speed replaces it; a host's
+ *   motion is refused meanwhile, and one of the host's is replaced by the
+ *   script's (E_CMD_ABORTED); a movement outlives the script;
  */
 #define _GNU_SOURCE /* mkdtemp */
 
@@ -952,6 +958,159 @@ static void part_ifaces(const char *exe)
     CHECK_EQ(emu_stop(&e), 0);
 }
 
+/* ---- part speed ---- */
+
+/* Speed mode (mc.speed(v)) as api.lua drives it, time paused. */
+static void part_speed(const char *exe)
+{
+    static const char *const args[] = {"--tcp", "127.0.0.1:0", "--control",
+                                       "127.0.0.1:0", NULL};
+    static const uint8_t ack[3] = {'a', 'c', 'k'};
+    const uint32_t blocked = WSG_SF_BLOCKED_MINUS | WSG_SF_BLOCKED_PLUS;
+    struct emu e;
+    struct emu_client c;
+    struct ctl k;
+    char t[512];
+    double w;
+
+    REQUIRE(emu_start(&e, exe, args) == 0);
+    REQUIRE(ctl_open(&k, &e) == 0);
+    REQUIRE(emu_open(&c, &e, &emu_tcp) == 0);
+    CMD_OK(&k, "time pause");
+    RUN_OK(&k, "api.lua");
+
+    /* Not before homing, as any motion. */
+    op_status(&c, OP_SPEED, (const float[]){-20}, 1, -1,
+              WSG_E_NOT_INITIALIZED);
+    op_status(&c, OP_HOMING, NULL, 0, 1, WSG_E_SUCCESS);
+    CMD_OK(&k, "time step 3000");
+    CHECK_NEAR(float_of(&c, WSG_CMD_GET_WIDTH), 110.0, 1e-3);
+    op(&c, OP_FORCE, (const float[]){30}, 1, -1, t, sizeof t);
+
+    /* Closing at 20 mm/s towards a part at 40 mm: moving, positioning, a
+     * speed of -20 from the first step on (the maximum acceleration). */
+    CMD_OK(&k, "part 40");
+    op_status(&c, OP_SPEED, (const float[]){-20}, 1, -1, WSG_E_SUCCESS);
+    CHECK(flags_of(&c) & WSG_SF_MOVING);
+    CHECK_EQ(grasp_state_of(&c), WSG_GS_POSITIONING);
+    /* Started, but only the steps move the fingers. */
+    readings(&c, t, sizeof t);
+    CHECK_STR(field(t, R_BUSY), "true");
+    CHECK_STR(field(t, R_SPEED), "0");
+    CMD_OK(&k, "time step 500");
+    CHECK_NEAR(float_of(&c, WSG_CMD_GET_SPEED), -20.0, 1e-3);
+    w = float_of(&c, WSG_CMD_GET_WIDTH);
+    CHECK(w > 99.9 && w < 100.1);
+    CHECK_EQ(flags_of(&c) & (WSG_SF_MOVING | blocked), WSG_SF_MOVING);
+    expect_readings(&c, "true");
+    readings(&c, t, sizeof t);
+    CHECK_STR(field(t, R_SPEED), "-20");
+    CHECK_STR(field(t, R_BLOCKED), "false");
+
+    /* At the part, 3.5 s later: blocked, pushing with the force limit,
+     * still in speed mode. */
+    CMD_OK(&k, "time step 4000");
+    readings(&c, t, sizeof t);
+    CHECK_STR(field(t, R_BLOCKED), "true");
+    CHECK_STR(field(t, R_BUSY), "true");
+    CHECK_STR(field(t, R_SPEED), "0");
+    CHECK_NEAR(field_num(t, R_AFORCE), 30.0, 1e-3);
+    CHECK_NEAR(float_of(&c, WSG_CMD_GET_FORCE), 30.0, 1e-3);
+    CHECK_EQ(flags_of(&c) & (WSG_SF_MOVING | blocked), WSG_SF_BLOCKED_MINUS);
+    w = float_of(&c, WSG_CMD_GET_WIDTH);
+    CHECK(w > 39.0 && w < 40.0);
+    /* A new limit is the push at once (the next step). */
+    op(&c, OP_FORCE, (const float[]){25}, 1, -1, t, sizeof t);
+    CMD_OK(&k, "time step 100");
+    CHECK_NEAR(float_of(&c, WSG_CMD_GET_FORCE), 25.0, 1e-3);
+
+    /* mc.stop ends it: stopped, idle, nothing pushing. */
+    op(&c, OP_STOP, NULL, 0, -1, t, sizeof t);
+    readings(&c, t, sizeof t);
+    CHECK_STR(field(t, R_BUSY), "false");
+    CHECK_STR(field(t, R_BLOCKED), "false");
+    CHECK_EQ(flags_of(&c) & (WSG_SF_MOVING | WSG_SF_AXIS_STOPPED),
+             WSG_SF_AXIS_STOPPED);
+    CHECK_EQ(grasp_state_of(&c), WSG_GS_IDLE);
+    CMD_OK(&k, "time step 100");
+    CHECK_NEAR(float_of(&c, WSG_CMD_GET_FORCE), 0.0, 1e-3);
+
+    /* A new mc.speed replaces the running one, no stop between. */
+    op_status(&c, OP_SPEED, (const float[]){20}, 1, -1, WSG_E_SUCCESS);
+    CMD_OK(&k, "time step 500");
+    CHECK_NEAR(float_of(&c, WSG_CMD_GET_SPEED), 20.0, 1e-3);
+    w = float_of(&c, WSG_CMD_GET_WIDTH);
+    op_status(&c, OP_SPEED, (const float[]){-10}, 1, -1, WSG_E_SUCCESS);
+    CMD_OK(&k, "time step 200");
+    CHECK_NEAR(float_of(&c, WSG_CMD_GET_SPEED), -10.0, 1e-3);
+    CHECK(float_of(&c, WSG_CMD_GET_WIDTH) < w);
+    expect_readings(&c, "true");
+
+    /* FAST STOP ends it; speed mode is refused until it is acknowledged. */
+    CHECK_EQ(emu_request(&c, WSG_CMD_FAST_STOP, NULL, 0, NULL, EMU_REPLY_MS),
+             WSG_E_SUCCESS);
+    readings(&c, t, sizeof t);
+    CHECK_STR(field(t, R_BUSY), "false");
+    CHECK_STR(field(t, R_SPEED), "0");
+    CHECK_EQ(flags_of(&c) & (WSG_SF_MOVING | WSG_SF_FAST_STOP),
+             WSG_SF_FAST_STOP);
+    op_status(&c, OP_SPEED, (const float[]){-20}, 1, -1, WSG_E_ACCESS_DENIED);
+    CHECK_EQ(
+        emu_request(&c, WSG_CMD_ACK_FAST_STOP, ack, 3, NULL, EMU_REPLY_MS),
+        WSG_E_SUCCESS);
+    op_status(&c, OP_SPEED, (const float[]){-20}, 1, -1, WSG_E_SUCCESS);
+    CMD_OK(&k, "time step 200");
+    CHECK_NEAR(float_of(&c, WSG_CMD_GET_SPEED), -20.0, 1e-3);
+
+    /* A host's motion is refused while the script's runs; its Stop (22h)
+     * stops speed mode. */
+    {
+        uint8_t mv[16];
+        size_t n = emu_move_payload(mv, 0, 80.0f, 50.0f);
+        struct wsg_client_frame f;
+
+        CHECK_EQ(
+            emu_request(&c, WSG_CMD_PREPOSITION, mv, n, NULL, EMU_REPLY_MS),
+            WSG_E_ALREADY_RUNNING);
+        CHECK_EQ(emu_request(&c, WSG_CMD_STOP, NULL, 0, NULL, EMU_REPLY_MS),
+                 WSG_E_SUCCESS);
+        readings(&c, t, sizeof t);
+        CHECK_STR(field(t, R_BUSY), "false");
+        CHECK_EQ(flags_of(&c) & WSG_SF_MOVING, 0);
+
+        /* A script's motion replaces a host's, whose final result is
+         * E_CMD_ABORTED. */
+        CHECK_EQ(
+            emu_request(&c, WSG_CMD_PREPOSITION, mv, n, NULL, EMU_REPLY_MS),
+            WSG_E_CMD_PENDING);
+        CMD_OK(&k, "time step 100");
+        op_status(&c, OP_SPEED, (const float[]){-20}, 1, -1, WSG_E_SUCCESS);
+        CHECK_EQ(emu_recv_id(&c, WSG_CMD_PREPOSITION, &f, EMU_REPLY_MS), 1);
+        CHECK_EQ(f.status, WSG_E_CMD_ABORTED);
+        CMD_OK(&k, "time step 100");
+        CHECK_NEAR(float_of(&c, WSG_CMD_GET_SPEED), -20.0, 1e-3);
+    }
+
+    /* The script's end stops speed mode: nothing drives it any more. */
+    CHECK(strcmp(ctl_cmd(&k, "script stop"), "ok script stopped") == 0);
+    CHECK_EQ(flags_of(&c) & WSG_SF_MOVING, 0);
+    CMD_OK(&k, "time step 100");
+    CHECK_NEAR(float_of(&c, WSG_CMD_GET_SPEED), 0.0, 1e-6);
+    CMD_OK(&k, "part none");
+
+    /* ...but a movement it started runs to its end. */
+    RUN_OK(&k, "api.lua");
+    op_status(&c, OP_MOVE, (const float[]){90, 50}, 2, 0, WSG_E_SUCCESS);
+    CMD_OK(&k, "time step 100");
+    CHECK(strcmp(ctl_cmd(&k, "script stop"), "ok script stopped") == 0);
+    CHECK(flags_of(&c) & WSG_SF_MOVING);
+    CMD_OK(&k, "time step 3000");
+    CHECK_NEAR(float_of(&c, WSG_CMD_GET_WIDTH), 90.0, 1e-3);
+    emu_close(&c);
+    ctl_close(&k);
+    CHECK_EQ(emu_stop(&e), 0);
+}
+
 int main(int argc, char **argv)
 {
     const char *exe = emu_exe(argc, argv);
@@ -969,6 +1128,10 @@ int main(int argc, char **argv)
     }
     if (all || strcmp(part, "ifaces") == 0) {
         part_ifaces(exe);
+        ran++;
+    }
+    if (all || strcmp(part, "speed") == 0) {
+        part_speed(exe);
         ran++;
     }
     if (!ran) {
