@@ -29,6 +29,11 @@
  *   and the script's end stop it, a new mc.speed replaces it; a host's
  *   motion is refused meanwhile, and one of the host's is replaced by the
  *   script's (E_CMD_ABORTED); a movement outlives the script;
+ * - lifecycle: D19 while running, through a power cycle; a runtime error
+ *   ends the script with D20, "script status" failed with the message,
+ *   the traceback in "script output"; a new run clears D20; a syntax
+ *   error and a missing file are refused by "script run"; one script at a
+ *   time;
  */
 #define _GNU_SOURCE /* mkdtemp */
 
@@ -1111,6 +1116,114 @@ static void part_speed(const char *exe)
     CHECK_EQ(emu_stop(&e), 0);
 }
 
+/* ---- part lifecycle ---- */
+
+/* "script output" from byte 0: the text, JSON-escaped as it comes. */
+static const char *script_output(struct ctl *k, unsigned long from)
+{
+    char line[64];
+
+    snprintf(line, sizeof line, "script output %lu", from);
+    return ctl_cmd(k, line);
+}
+
+static void part_lifecycle(const char *exe)
+{
+    static const char *const args[] = {"--tcp", "127.0.0.1:0", "--control",
+                                       "127.0.0.1:0", NULL};
+    struct emu e;
+    struct emu_client c;
+    struct ctl k;
+    uint8_t ok = 0, fail = 1;
+    char st[2048], want[640];
+    const char *ans;
+    unsigned long end;
+    unsigned seen;
+
+    REQUIRE(emu_start(&e, exe, args) == 0);
+    REQUIRE(ctl_open(&k, &e) == 0);
+    REQUIRE(emu_open(&c, &e, &emu_tcp) == 0);
+
+    /* Running: D19, not D20; the status says so. */
+    RUN_OK(&k, "fail.lua");
+    CHECK_EQ(flags_of(&c) & (D19 | D20), D19);
+    snprintf(st, sizeof st, "%s", script_status(&k));
+    CHECK_HAS(st, "{\"running\":true,\"failed\":false,\"error\":null,");
+    CHECK_HAS(st, "\"state\":\"reading\",\"registered\":[176],");
+    CHECK_EQ(emu_request(&c, ID_ECHO, &ok, 1, NULL, EMU_REPLY_MS),
+             WSG_E_SUCCESS);
+    /* A power cycle leaves the script alone. */
+    CMD_OK(&k, "reset");
+    CHECK_EQ(flags_of(&c) & (D19 | D20), D19);
+    CHECK_EQ(emu_request(&c, ID_ECHO, &ok, 1, NULL, EMU_REPLY_MS),
+             WSG_E_SUCCESS);
+    /* One script at a time. */
+    ans = run_script(&k, "fail.lua");
+    CHECK_HAS(ans, "error script: a script is running");
+
+    /* A runtime error: no answer, the script ended with D20, its message
+     * in the status, its traceback in the output, its IDs unknown. */
+    end = (unsigned long)ctl_json_num(script_output(&k, 0), "end");
+    seen = c.link.seen[ID_ECHO];
+    REQUIRE(emu_send(&c, ID_ECHO, &fail, 1) == 0);
+    REQUIRE(emu_sync(&c, EMU_REPLY_MS) == 0);
+    CHECK_EQ(c.link.seen[ID_ECHO], seen);
+    CHECK_EQ(flags_of(&c) & (D19 | D20), D20);
+    snprintf(st, sizeof st, "%s", script_status(&k));
+    CHECK_HAS(st, "{\"running\":false,\"failed\":true,\"error\":\"");
+    CHECK_HAS(st, "fail.lua:");
+    CHECK_HAS(st, ": boom: asked to fail\"");
+    CHECK_HAS(st, "\"state\":\"stopped\",\"registered\":[],");
+    ans = script_output(&k, end);
+    CHECK_HAS(ans, "\"text\":\"error: ");
+    CHECK_HAS(ans, ": boom: asked to fail\\nstack traceback:");
+    /* Both functions named; the words around the names are Lua's and
+     * change between its releases. */
+    CHECK_HAS(ans, "'explode'");
+    CHECK_HAS(ans, "'middle'");
+    CHECK_EQ(emu_request(&c, ID_ECHO, &ok, 1, NULL, EMU_REPLY_MS),
+             WSG_E_CMD_UNKNOWN);
+
+    /* A new run clears D20 and the error. */
+    RUN_OK(&k, "fail.lua");
+    CHECK_EQ(flags_of(&c) & (D19 | D20), D19);
+    CHECK_HAS(script_status(&k), "{\"running\":true,\"failed\":false,"
+                                 "\"error\":null,");
+    CHECK_EQ(emu_request(&c, ID_ECHO, &ok, 1, NULL, EMU_REPLY_MS),
+             WSG_E_SUCCESS);
+    CHECK(strcmp(ctl_cmd(&k, "script stop"), "ok script stopped") == 0);
+    CHECK_EQ(flags_of(&c) & (D19 | D20), 0);
+    CHECK(strcmp(ctl_cmd(&k, "script stop"), "ok script not running") == 0);
+
+    /* A syntax error: refused with where it is, D20 set, nothing runs. */
+    end = (unsigned long)ctl_json_num(script_output(&k, 0), "end");
+    ans = run_script(&k, "syntax.lua");
+    CHECK_HAS(ans, "error script: ");
+    CHECK_HAS(ans, "syntax.lua:4: ");
+    CHECK_EQ(flags_of(&c) & (D19 | D20), D20);
+    snprintf(st, sizeof st, "%s", script_status(&k));
+    CHECK_HAS(st, "{\"running\":false,\"failed\":true,\"error\":\"");
+    CHECK_HAS(st, "syntax.lua:4: ");
+    CHECK_HAS(script_output(&k, end), "\"text\":\"error: ");
+    CHECK_EQ(emu_request(&c, ID_ECHO, &ok, 1, NULL, EMU_REPLY_MS),
+             WSG_E_CMD_UNKNOWN);
+
+    /* A file that is not there: refused, why said. */
+    ans = run_script(&k, "no-such-script.lua");
+    snprintf(want, sizeof want,
+             "error script: %s/no-such-script.lua: No "
+             "such file or directory",
+             scripts);
+    CHECK_STR(ans, want);
+    /* Still there after all that: a run that works. */
+    RUN_OK(&k, "fail.lua");
+    CHECK_EQ(flags_of(&c) & (D19 | D20), D19);
+    CHECK_EQ(c.link.bad, 0);
+    emu_close(&c);
+    ctl_close(&k);
+    CHECK_EQ(emu_stop(&e), 0);
+}
+
 int main(int argc, char **argv)
 {
     const char *exe = emu_exe(argc, argv);
@@ -1132,6 +1245,10 @@ int main(int argc, char **argv)
     }
     if (all || strcmp(part, "speed") == 0) {
         part_speed(exe);
+        ran++;
+    }
+    if (all || strcmp(part, "lifecycle") == 0) {
+        part_lifecycle(exe);
         ran++;
     }
     if (!ran) {
