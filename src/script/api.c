@@ -58,6 +58,15 @@ static double api_number(lua_State *L, int arg)
     return v;
 }
 
+/* A number for a motion: NaN goes through, for the axis to refuse with
+ * E_INVALID_PARAMETER, the status the script gets (as a host gets it for
+ * a NaN in a command) rather than an error that would end a script
+ * whose controller computed one. */
+static double api_motion_number(lua_State *L, int arg)
+{
+    return luaL_checknumber(L, arg);
+}
+
 /* The status a motion request leaves the script with: E_SUCCESS when it
  * started (there is no packet to be pending on), else why not. */
 static int api_motion(lua_State *L, uint16_t st)
@@ -374,7 +383,7 @@ static int mc_speed(lua_State *L)
         lua_pushnumber(L, wsg_axis_speed(api_axis(L)));
         return 1;
     }
-    v = api_number(L, 1);
+    v = api_motion_number(L, 1);
     st = wsg_device_motion_check(h->dev, 1);
     if (st == WSG_E_SUCCESS)
         st = wsg_axis_request_speed(api_axis(L), v, 0);
@@ -425,7 +434,7 @@ static int mc_stop(lua_State *L)
 static int mc_move(lua_State *L)
 {
     struct wsg_script *h = wsg_script_of(L);
-    double w = api_number(L, 1), v = api_number(L, 2);
+    double w = api_motion_number(L, 1), v = api_motion_number(L, 2);
     lua_Integer flags = luaL_optinteger(L, 3, 0);
     uint16_t st = wsg_device_motion_check(h->dev, 1);
 
@@ -486,7 +495,7 @@ static const luaL_Reg gripper_lib[] = {{"state", gripper_state}, {NULL, NULL}};
 static int grasping_move(lua_State *L)
 {
     struct wsg_script *h = wsg_script_of(L);
-    double w = api_number(L, 1), v = api_number(L, 2);
+    double w = api_motion_number(L, 1), v = api_motion_number(L, 2);
     uint16_t st = wsg_device_motion_check(h->dev, 1);
 
     if (st == WSG_E_SUCCESS)
@@ -494,14 +503,32 @@ static int grasping_move(lua_State *L)
     return api_motion(L, st);
 }
 
+/* The optional force of a grasp or clamp, at arg: set as the force limit
+ * when it is given and the motion may start (st, the status so far). A
+ * NaN sets nothing and refuses the motion, as a NaN width or speed does.
+ * Returns the status. */
+static uint16_t api_grasp_force(lua_State *L, int arg, uint16_t st)
+{
+    double f;
+
+    if (lua_isnoneornil(L, arg))
+        return st;
+    f = api_motion_number(L, arg);
+    if (st != WSG_E_SUCCESS)
+        return st;
+    if (isnan(f))
+        return WSG_E_INVALID_PARAMETER;
+    wsg_axis_set_force_limit(api_axis(L), f);
+    return st;
+}
+
 static int grasping_grasp(lua_State *L)
 {
     struct wsg_script *h = wsg_script_of(L);
-    double w = api_number(L, 1), v = api_number(L, 2);
+    double w = api_motion_number(L, 1), v = api_motion_number(L, 2);
     uint16_t st = wsg_device_motion_check(h->dev, 1);
 
-    if (st == WSG_E_SUCCESS && !lua_isnoneornil(L, 3))
-        wsg_axis_set_force_limit(api_axis(L), api_number(L, 3));
+    st = api_grasp_force(L, 3, st);
     if (st == WSG_E_SUCCESS)
         st = wsg_axis_request_grasp(api_axis(L), w, v, 0);
     return api_motion(L, st);
@@ -515,12 +542,11 @@ static int grasping_clamp(lua_State *L)
     struct wsg_script *h = wsg_script_of(L);
     struct wsg_axis *ax = api_axis(L);
     struct wsg_grasp_window win;
-    double travel = api_number(L, 1);
+    double travel = api_motion_number(L, 1);
     uint16_t st = wsg_device_motion_check(h->dev, 1);
 
-    luaL_argcheck(L, travel >= 0, 1, "travel must not be negative");
-    if (st == WSG_E_SUCCESS && !lua_isnoneornil(L, 2))
-        wsg_axis_set_force_limit(ax, api_number(L, 2));
+    luaL_argcheck(L, !(travel < 0), 1, "travel must not be negative");
+    st = api_grasp_force(L, 2, st);
     win.travel = travel;
     win.tolerance = 0.0;
     if (st == WSG_E_SUCCESS)
@@ -532,7 +558,7 @@ static int grasping_clamp(lua_State *L)
 static int grasping_release(lua_State *L)
 {
     struct wsg_script *h = wsg_script_of(L);
-    double w = api_number(L, 1), v = api_number(L, 2);
+    double w = api_motion_number(L, 1), v = api_motion_number(L, 2);
     uint16_t st = wsg_device_motion_check(h->dev, 1);
 
     if (st == WSG_E_SUCCESS)

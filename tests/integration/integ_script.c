@@ -14,8 +14,8 @@
  *   ntob and etob to the byte, the E_* globals against the schema, print
  *   and printf through "script output", math.nan, socket.gettime() and
  *   socket.sleep in simulated time, the Lua 5.1 names, require beside the
- *   script, cmd.read and sleep inside pcall, a normal end (D19 and D20
- *   clear);
+ *   script, cmd.read and sleep inside pcall, a NaN in a motion refused
+ *   with E_INVALID_PARAMETER, a normal end (D19 and D20 clear);
  * - ifaces: registered IDs answered over TCP, UDP and the serial port,
  *   unregistered ones E_CMD_UNKNOWN, packets the firmware refuses (too
  *   long, after 07h) never reaching the script; cmd.send answers the peer
@@ -579,6 +579,30 @@ static void api_motion(struct emu_client *c, struct ctl *k)
              WSG_SF_AXIS_STOPPED);
     readings(c, t, sizeof t);
     CHECK_STR(field(t, R_SPEED), "0");
+    expect_readings(c, "false");
+
+    /* A NaN in a motion is the status E_INVALID_PARAMETER, as for a host:
+     * the script goes on, nothing moves, a NaN force is not set. */
+    lim = float_of(c, WSG_CMD_GET_FORCE_LIMIT);
+    op_status(c, OP_SPEED, (const float[]){NAN}, 1, -1,
+              WSG_E_INVALID_PARAMETER);
+    op_status(c, OP_MOVE, (const float[]){NAN, 50}, 2, 0,
+              WSG_E_INVALID_PARAMETER);
+    op_status(c, OP_MOVE, (const float[]){50, NAN}, 2, 0,
+              WSG_E_INVALID_PARAMETER);
+    op_status(c, OP_GRASP_MOVE, (const float[]){NAN, 50}, 2, -1,
+              WSG_E_INVALID_PARAMETER);
+    op_status(c, OP_GRASP, (const float[]){40, 50, NAN}, 3, -1,
+              WSG_E_INVALID_PARAMETER);
+    /* (A good force is set first, as grasping.grasp's is: the limit.) */
+    op_status(c, OP_CLAMP, (const float[]){NAN, (float)lim}, 2, -1,
+              WSG_E_INVALID_PARAMETER);
+    op_status(c, OP_CLAMP, (const float[]){5, NAN}, 2, -1,
+              WSG_E_INVALID_PARAMETER);
+    op_status(c, OP_RELEASE, (const float[]){60, NAN}, 2, -1,
+              WSG_E_INVALID_PARAMETER);
+    CHECK_EQ(flags_of(c) & WSG_SF_MOVING, 0);
+    CHECK_NEAR(float_of(c, WSG_CMD_GET_FORCE_LIMIT), lim, 1e-6);
     expect_readings(c, "false");
 
     /* mc.force(limit): the limit 33h reads; mc.pid(kp, ki, kd) */
