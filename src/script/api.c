@@ -81,12 +81,13 @@ static int api_motion(lua_State *L, uint16_t st)
 }
 
 /* The session cmd.send answers: the one whose packet was read last, else
- * the one that sent the gripper anything last. */
+ * (nothing read yet) the one that sent the gripper anything last. NULL
+ * when that one is gone: an answer to a host that left must not go to
+ * another one, which never asked for it. */
 static struct wsg_session *api_host(struct wsg_script *h)
 {
-    struct wsg_session *s = wsg_device_session(h->dev, h->reply_tag);
-
-    return s ? s : wsg_device_session(h->dev, h->dev->last_tag);
+    return wsg_device_session(h->dev,
+                              h->reply_tag ? h->reply_tag : h->dev->last_tag);
 }
 
 static void api_bytes(lua_State *L, const uint8_t *p, int n)

@@ -20,7 +20,7 @@
  *   unregistered ones E_CMD_UNKNOWN, packets the firmware refuses (too
  *   long, after 07h) never reaching the script; cmd.send answers the peer
  *   whose packet was read last (two TCP clients interleaved, and across
- *   interfaces); packets that come
+ *   interfaces), and nobody when that peer has gone; packets that come
  *   while the script sleeps are read in order, and one past the queue is
  *   E_OVERRUN; after "script stop" the IDs are E_CMD_UNKNOWN again;
  * - speed: speed mode from a script: mc.speed(-20) closes at 20 mm/s
@@ -368,7 +368,7 @@ static void api_cmd(struct emu_client *c, struct ctl *k)
     REQUIRE(ask(c, 0xC5, dyn, 3, t, sizeof t) == 0);
     CHECK_STR(t, "dyn|3");
     CHECK_HAS(script_status(k),
-              "\"registered\":[161,176,177,178,179,180,181,182,"
+              "\"registered\":[160,161,176,177,178,179,180,181,182,"
               "183,184,185,186,187,188,189,190,191,197]");
     REQUIRE(ask(c, ID_REGISTER, unreg, 2, t, sizeof t) == 0);
     CHECK_STR(t, "true");
@@ -840,6 +840,33 @@ static void ifaces_two_clients(struct emu_client *a, struct emu_client *b,
     emu_drop_kept(b);
 }
 
+/* An answer for a client that has gone goes nowhere: cmd.send returns
+ * false, and the client that talked last (b) gets nothing. */
+static void ifaces_gone(struct emu *e, struct emu_client *b, struct ctl *k)
+{
+    uint8_t ten = 10;
+    unsigned seen[256];
+    struct emu_client a;
+    char t[64];
+
+    REQUIRE(emu_open(&a, e, &emu_tcp) == 0);
+    REQUIRE(emu_send(&a, ID_SLEEP, &ten, 1) == 0);
+    REQUIRE(emu_sync(&a, EMU_REPLY_MS) == 0);
+    /* Announced (07h): no FAST STOP for the close. */
+    CHECK_EQ(emu_request(&a, WSG_CMD_DISCONNECT, NULL, 0, NULL, EMU_REPLY_MS),
+             WSG_E_SUCCESS);
+    emu_close(&a);
+    /* The close is in the daemon before b's Loop: the kernel has it when
+     * close returns. b is the last to have sent anything. */
+    REQUIRE(emu_sync(b, EMU_REPLY_MS) == 0);
+    memcpy(seen, b->link.seen, sizeof seen);
+    CMD_OK(k, "time step 10");
+    CHECK_EQ(seen_since(b, seen, ID_SLEEP), 0);
+    REQUIRE(ask(b, 0xA0, NULL, 0, t, sizeof t) == 0);
+    CHECK_STR(t, "false");
+    CHECK_EQ(flags_of(b) & WSG_SF_FAST_STOP, 0);
+}
+
 /* The same across interfaces: the serial port's sleep, then TCP's and
  * UDP's echoes queued behind it; each answer on its own interface. */
 static void ifaces_across(struct emu_client *c, struct ctl *k)
@@ -966,6 +993,7 @@ static void part_ifaces(const char *exe)
     }
 
     ifaces_two_clients(&c[0], &b, &k);
+    ifaces_gone(&e, &b, &k);
     ifaces_across(c, &k);
     ifaces_queue(&c[0], &k);
 

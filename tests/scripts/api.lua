@@ -21,10 +21,16 @@ h[0xB1] = function(id)
 end
 
 -- Sleep p[1] ms, inside pcall, then tell how many packets came meanwhile
--- and the clock: the wait must survive a protected call.
+-- and the clock: the wait must survive a protected call. Whether the
+-- answer could be sent is kept for A0h.
+local sleep_sent
 h[0xB2] = function(id, p)
   local ok = pcall(sleep, p[1])
-  wire.reply(id, ok, cmd.available(), socket.gettime())
+  sleep_sent = wire.reply(id, ok, cmd.available(), socket.gettime())
+end
+
+h[0xA0] = function(id)
+  wire.reply(id, sleep_sent)
 end
 
 -- socket.sleep, in seconds: p[1] ms.
