@@ -34,6 +34,12 @@
  *   the traceback in "script output"; a new run clears D20; a syntax
  *   error and a missing file are refused by "script run"; one script at a
  *   time;
+ * - sandbox: os.execute, io, debug, loadlib, binary chunks, modules
+ *   outside the script's directory all fail inside the script; a loop is
+ *   preempted and every interface answers meanwhile; loops where the
+ *   script cannot yield end in an error, and a loop around them does not
+ *   hold the daemon; finalizers never run; the memory cap
+ *   (--script-memory 2) ends a growing script with D20;
  */
 #define _GNU_SOURCE /* mkdtemp */
 
@@ -1276,6 +1282,217 @@ static void part_lifecycle(const char *exe)
     CHECK_EQ(emu_stop(&e), 0);
 }
 
+/* ---- part sandbox ---- */
+
+/* The sandbox's directory: DIR/user/ holds copies of sandbox.lua and
+ * wire.lua (and later binmod.lua, a precompiled chunk), DIR/outside.lua a
+ * module just outside the script's directory. Removed at exit. */
+static char sandbox_dir[128];
+
+static void sandbox_remove(void)
+{
+    static const char *const files[] = {"user/sandbox.lua", "user/wire.lua",
+                                        "user/binmod.lua", "outside.lua"};
+    char path[256];
+    size_t i;
+
+    if (!sandbox_dir[0])
+        return;
+    for (i = 0; i < sizeof files / sizeof files[0]; i++) {
+        snprintf(path, sizeof path, "%s/%s", sandbox_dir, files[i]);
+        unlink(path);
+    }
+    snprintf(path, sizeof path, "%s/user", sandbox_dir);
+    rmdir(path);
+    rmdir(sandbox_dir);
+}
+
+static int write_file(const char *path, const void *data, size_t len)
+{
+    FILE *f = fopen(path, "wb");
+    int ok;
+
+    if (!f)
+        return -1;
+    ok = fwrite(data, 1, len, f) == len;
+    return fclose(f) == 0 && ok ? 0 : -1;
+}
+
+static int copy_script(const char *name)
+{
+    char from[512], to[256], buf[16384];
+    FILE *f;
+    size_t n;
+
+    script_file(from, sizeof from, name);
+    snprintf(to, sizeof to, "%s/user/%s", sandbox_dir, name);
+    f = fopen(from, "rb");
+    if (!f)
+        return -1;
+    n = fread(buf, 1, sizeof buf, f);
+    fclose(f);
+    return n == sizeof buf ? -1 : write_file(to, buf, n);
+}
+
+static void sandbox_setup(void)
+{
+    static const char outside[] = "return 'outside'\n";
+    char path[256];
+
+    snprintf(sandbox_dir, sizeof sandbox_dir, "/tmp/wsgemu-script-XXXXXX");
+    REQUIRE(mkdtemp(sandbox_dir) != NULL);
+    atexit(sandbox_remove);
+    snprintf(path, sizeof path, "%s/user", sandbox_dir);
+    REQUIRE(mkdir(path, 0700) == 0);
+    REQUIRE(copy_script("sandbox.lua") == 0);
+    REQUIRE(copy_script("wire.lua") == 0);
+    snprintf(path, sizeof path, "%s/outside.lua", sandbox_dir);
+    REQUIRE(write_file(path, outside, sizeof outside - 1) == 0);
+}
+
+/* What the script cannot reach or load. */
+static void sandbox_closed(struct emu_client *c)
+{
+    struct wsg_client_frame f;
+    char t[2048], path[256];
+    const char *msg;
+
+    REQUIRE(ask(c, 0xB0, NULL, 0, t, sizeof t) == 0);
+    CHECK_STR(t, "nil|error:attempt to call a nil value|nil|nil|nil|nil|"
+                 "error:module 'io' not found:|nil|"
+                 "error:module 'debug' not found:|nil|nil|nil|nil|"
+                 "nil:attempt to load a binary chunk (mode is 't')|"
+                 "nil:attempt to load a binary chunk (mode is 't')|"
+                 "nil:attempt to load a binary chunk (mode is 't')|"
+                 "nil:attempt to load a binary chunk (mode is 't')|"
+                 "error:module '../outside' not found:|");
+
+    /* A precompiled chunk, as the script's string.dump made it, beside
+     * the script: require must not load it. Nor a module outside its
+     * directory, by a package.path of the script's. */
+    CHECK_EQ(emu_request(c, 0xB2, NULL, 0, &f, EMU_REPLY_MS), WSG_E_SUCCESS);
+    REQUIRE(EMU_NPARAMS(&f) > 4 && memcmp(EMU_PARAMS(&f), "\033Lua", 4) == 0);
+    snprintf(path, sizeof path, "%s/user/binmod.lua", sandbox_dir);
+    REQUIRE(write_file(path, EMU_PARAMS(&f), EMU_NPARAMS(&f)) == 0);
+    REQUIRE(ask(c, 0xB1, sandbox_dir, strlen(sandbox_dir), t, sizeof t) == 0);
+    msg = field(t, 0);
+    CHECK_HAS(msg, "error:module 'outside' not found:");
+    msg = field(t, 1);
+    CHECK_HAS(msg, "error:error loading module 'binmod' from file '");
+    CHECK_HAS(msg, "binmod.lua': attempt to load a binary chunk (mode is "
+                   "'t')");
+}
+
+static void part_sandbox(const char *exe)
+{
+    static const struct emu_transport *const tps[3] = {&emu_tcp, &emu_udp,
+                                                       &emu_pty};
+    static const char *const extra[] = {"--control", "127.0.0.1:0",
+                                        "--script-memory", "2", NULL};
+    struct emu e;
+    struct emu_client c[3];
+    struct wsg_client_frame f;
+    struct ctl k;
+    char t[1024], path[256], st[2048];
+    double pre, slowest;
+    int i, round;
+
+    sandbox_setup();
+    snprintf(path, sizeof path, "%s/user/sandbox.lua", sandbox_dir);
+    REQUIRE(emu_start_multi(&e, exe, tps, 3, extra) == 0);
+    REQUIRE(ctl_open(&k, &e) == 0);
+    for (i = 0; i < 3; i++)
+        REQUIRE(emu_open(&c[i], &e, tps[i]) == 0);
+    RUN_OK(&k, path);
+    CHECK_HAS(script_status(&k), "\"memory_max\":2097152,");
+
+    sandbox_closed(&c[0]);
+
+    /* A finalizer never runs (it would loop where no hook reaches); the
+     * metatable is set all the same. */
+    REQUIRE(ask(&c[0], 0xB6, NULL, 0, t, sizeof t) == 0);
+    CHECK_STR(t, "false|true|true");
+
+    /* Loops where the script cannot yield end in an error, the script
+     * goes on. Bounded by the host's limit of stuck slices: long on a
+     * slow machine, so the wait is a long one. */
+    REQUIRE(emu_send(&c[0], 0xB5, NULL, 0) == 0);
+    REQUIRE(take(&c[0], 0xB5, t, sizeof t, emu_ms(30000)) == 0);
+    CHECK_HAS(field(t, 0), "error:");
+    CHECK_HAS(field(t, 0), "where it cannot be preempted");
+    CHECK_STR(field(t, 1), "false");
+    CHECK_STR(field(t, 2), "dead");
+    CHECK_EQ(emu_request(&c[0], 0xB7, NULL, 0, NULL, EMU_REPLY_MS),
+             WSG_E_SUCCESS);
+
+    /* A loop catching those errors for ever: the daemon still answers,
+     * between stuck stretches. */
+    REQUIRE(emu_send(&c[0], 0xB8, NULL, 0) == 0);
+    slowest = 0;
+    for (round = 0; round < 3; round++)
+        for (i = 0; i < 3; i++) {
+            double t0 = emu_now_ms();
+
+            CHECK_EQ(emu_request(&c[i], WSG_CMD_GET_WIDTH, NULL, 0, NULL,
+                                 EMU_REPLY_MS),
+                     WSG_E_SUCCESS);
+            if (emu_now_ms() - t0 > slowest)
+                slowest = emu_now_ms() - t0;
+        }
+    printf("43h beside a loop around stuck coroutines: slowest %.0f ms\n",
+           slowest);
+    CHECK(strcmp(ctl_cmd(&k, "script stop"), "ok script stopped") == 0);
+
+    /* A loop in the body is preempted: every interface answers 43h well
+     * within a second, the control channel too, and the status counts
+     * the preemptions. */
+    RUN_OK(&k, path);
+    REQUIRE(emu_send(&c[0], 0xB3, NULL, 0) == 0);
+    REQUIRE(emu_sync(&c[0], EMU_REPLY_MS) == 0);
+    snprintf(st, sizeof st, "%s", script_status(&k));
+    CHECK_HAS(st, "\"running\":true,");
+    pre = ctl_json_num(st, "preempted");
+    slowest = 0;
+    for (round = 0; round < 5; round++)
+        for (i = 0; i < 3; i++) {
+            double t0 = emu_now_ms();
+
+            CHECK_EQ(emu_request(&c[i], WSG_CMD_GET_WIDTH, NULL, 0, &f,
+                                 emu_ms(1000)),
+                     WSG_E_SUCCESS);
+            if (emu_now_ms() - t0 > slowest)
+                slowest = emu_now_ms() - t0;
+        }
+    printf("43h beside a preempted loop: slowest %.1f ms\n", slowest);
+    snprintf(st, sizeof st, "%s", script_status(&k));
+    CHECK_HAS(st, "\"state\":\"runnable\",");
+    CHECK(ctl_json_num(st, "preempted") > pre);
+    CHECK(pre > 0);
+    CHECK_EQ(flags_of(&c[0]) & (D19 | D20), D19);
+    CHECK(strcmp(ctl_cmd(&k, "script stop"), "ok script stopped") == 0);
+    CHECK_EQ(flags_of(&c[0]) & (D19 | D20), 0);
+
+    /* Past the memory cap: the script ends with D20 and says why; the
+     * daemon goes on. */
+    RUN_OK(&k, path);
+    REQUIRE(emu_send(&c[0], 0xB4, NULL, 0) == 0);
+    CHECK(emu_wait_flags(&c[0], D19 | D20, D20, EMU_REPLY_MS, NULL) == 0);
+    snprintf(st, sizeof st, "%s", script_status(&k));
+    CHECK_HAS(st, "{\"running\":false,\"failed\":true,\"error\":\"not "
+                  "enough memory");
+    for (i = 0; i < 3; i++) {
+        CHECK_EQ(
+            emu_request(&c[i], WSG_CMD_GET_WIDTH, NULL, 0, NULL, EMU_REPLY_MS),
+            WSG_E_SUCCESS);
+        CHECK_EQ(emu_request(&c[i], 0xB7, NULL, 0, NULL, EMU_REPLY_MS),
+                 WSG_E_CMD_UNKNOWN);
+        CHECK_EQ(c[i].link.bad, 0);
+        emu_close(&c[i]);
+    }
+    ctl_close(&k);
+    CHECK_EQ(emu_stop(&e), 0);
+}
+
 int main(int argc, char **argv)
 {
     const char *exe = emu_exe(argc, argv);
@@ -1301,6 +1518,10 @@ int main(int argc, char **argv)
     }
     if (all || strcmp(part, "lifecycle") == 0) {
         part_lifecycle(exe);
+        ran++;
+    }
+    if (all || strcmp(part, "sandbox") == 0) {
+        part_sandbox(exe);
         ran++;
     }
     if (!ran) {
