@@ -40,6 +40,9 @@
  *   script cannot yield end in an error, and a loop around them does not
  *   hold the daemon; finalizers never run; the memory cap
  *   (--script-memory 2) ends a growing script with D20;
+ * - lockstep: a script sleeping 10 ms in a loop has counted exactly 100
+ *   after 1000 ms of steps, on every run, and socket.gettime() is the
+ *   stepped time exactly;
  */
 #define _GNU_SOURCE /* mkdtemp */
 
@@ -1493,6 +1496,89 @@ static void part_sandbox(const char *exe)
     CHECK_EQ(emu_stop(&e), 0);
 }
 
+/* ---- part lockstep ---- */
+
+/* clock.lua with period ms: started at the time "time" says (the reply
+ * is socket.gettime() then, exactly); returns that time, us. */
+static long long clock_start(struct emu_client *c, struct ctl *k,
+                             unsigned period)
+{
+    uint8_t p[2] = {(uint8_t)(period & 0xFF), (uint8_t)(period >> 8)};
+    char t[128];
+    long long t0;
+
+    RUN_OK(k, "clock.lua");
+    t0 = ctl_time(k);
+    REQUIRE(t0 >= 0);
+    REQUIRE(ask(c, 0xB0, p, 2, t, sizeof t) == 0);
+    CHECK_EQ(field_num(t, 0), seconds(t0));
+    return t0;
+}
+
+/* Ask clock.lua for its count at its next wake: the query waits in the
+ * queue (the daemon has it before the steps: emu_sync), and the steps
+ * that follow wake the script, which answers before "time step" does. */
+static void clock_query(struct emu_client *c)
+{
+    REQUIRE(emu_send(c, 0xB1, NULL, 0) == 0);
+    REQUIRE(emu_sync(c, EMU_REPLY_MS) == 0);
+}
+
+static void part_lockstep(const char *exe)
+{
+    static const char *const args[] = {"--tcp", "127.0.0.1:0", "--control",
+                                       "127.0.0.1:0", NULL};
+    struct wsg_client_frame f;
+    struct emu e;
+    struct emu_client c;
+    struct ctl k;
+    char t[128], want[64];
+    long long t0;
+    int run, s;
+
+    REQUIRE(emu_start(&e, exe, args) == 0);
+    REQUIRE(ctl_open(&k, &e) == 0);
+    REQUIRE(emu_open(&c, &e, &emu_tcp) == 0);
+    CMD_OK(&k, "time pause");
+
+    /* Sleeping 10 ms at a time: 100 wakes in 1000 ms of steps, 200 in
+     * 2000, on every run. The query is answered at the wake that ends
+     * the stretch (the last 10 ms are stepped after it is queued). */
+    for (run = 0; run < 3; run++) {
+        t0 = clock_start(&c, &k, 10);
+        for (s = 1; s <= 2; s++) {
+            CMD_OK(&k, "time step 990");
+            clock_query(&c);
+            if (s == 1 && run == 0) /* waits for the wake, time paused */
+                CHECK_EQ(emu_recv_id(&c, 0xB1, &f, EMU_QUIET_MS), 0);
+            CMD_OK(&k, "time step 10");
+            REQUIRE(take(&c, 0xB1, t, sizeof t, EMU_REPLY_MS) == 0);
+            snprintf(want, sizeof want, "%d", 100 * s);
+            CHECK_STR(field(t, 0), want);
+            CHECK_EQ(field_num(t, 1), seconds(t0 + s * 1000000LL));
+            CHECK_EQ(ctl_time(&k), t0 + s * 1000000LL);
+        }
+        CHECK(strcmp(ctl_cmd(&k, "script stop"), "ok script stopped") == 0);
+    }
+
+    /* Sleeping 250 ms at a time, "time step 250" each: the query sent
+     * before each step is answered at the wake inside it, and
+     * socket.gettime() is the stepped time to the microsecond. */
+    t0 = clock_start(&c, &k, 250);
+    for (s = 1; s <= 4; s++) {
+        clock_query(&c);
+        CHECK_EQ(ctl_time_us(ctl_cmd(&k, "time step 250")), t0 + s * 250000LL);
+        REQUIRE(take(&c, 0xB1, t, sizeof t, EMU_REPLY_MS) == 0);
+        snprintf(want, sizeof want, "%d", s);
+        CHECK_STR(field(t, 0), want);
+        CHECK_EQ(field_num(t, 1), seconds(t0 + s * 250000LL));
+    }
+    CHECK(strcmp(ctl_cmd(&k, "script stop"), "ok script stopped") == 0);
+    emu_close(&c);
+    ctl_close(&k);
+    CHECK_EQ(emu_stop(&e), 0);
+}
+
 int main(int argc, char **argv)
 {
     const char *exe = emu_exe(argc, argv);
@@ -1522,6 +1608,10 @@ int main(int argc, char **argv)
     }
     if (all || strcmp(part, "sandbox") == 0) {
         part_sandbox(exe);
+        ran++;
+    }
+    if (all || strcmp(part, "lockstep") == 0) {
+        part_lockstep(exe);
         ran++;
     }
     if (!ran) {
