@@ -43,6 +43,9 @@
  * - lockstep: a script sleeping 10 ms in a loop has counted exactly 100
  *   after 1000 ms of steps, on every run, and socket.gettime() is the
  *   stepped time exactly;
+ * - startup: --script registers its IDs before the ready line, a missing
+ *   file is exit status 1, a syntax error leaves the daemon running with
+ *   D20.
  */
 #define _GNU_SOURCE /* mkdtemp */
 
@@ -1579,6 +1582,62 @@ static void part_lockstep(const char *exe)
     CHECK_EQ(emu_stop(&e), 0);
 }
 
+/* ---- part startup ---- */
+
+static void part_startup(const char *exe)
+{
+    char api[512], syntax[512], missing[512], out[512], err[2048];
+    const char *args[] = {"--tcp",       "127.0.0.1:0", "--control",
+                          "127.0.0.1:0", "--script",    api,
+                          NULL};
+    static const uint8_t p[2] = {0x42, 0x43};
+    struct wsg_client_frame f;
+    struct emu e;
+    struct emu_client c;
+    struct ctl k;
+    int st;
+
+    script_file(api, sizeof api, "api.lua");
+    script_file(syntax, sizeof syntax, "syntax.lua");
+    script_file(missing, sizeof missing, "no-such-script.lua");
+
+    /* The script's IDs are registered before the ready line: the first
+     * packet after it is the script's. */
+    REQUIRE(emu_start(&e, exe, args) == 0);
+    REQUIRE(emu_open(&c, &e, &emu_tcp) == 0);
+    CHECK_EQ(emu_request(&c, ID_ECHO, p, 2, &f, EMU_REPLY_MS), WSG_E_SUCCESS);
+    CHECK(EMU_NPARAMS(&f) == 2 && memcmp(EMU_PARAMS(&f), p, 2) == 0);
+    CHECK_EQ(flags_of(&c) & (D19 | D20), D19);
+    emu_close(&c);
+    CHECK_EQ(emu_stop(&e), 0);
+
+    /* A file that cannot be read: a bad start, status 1, no ready line. */
+    args[5] = missing;
+    st = emu_run(exe, args, EMU_READY_MS, out, sizeof out, err, sizeof err);
+    CHECK_EQ(st, 1);
+    CHECK(strstr(out, "ready") == NULL);
+    CHECK_HAS(err, "no-such-script.lua");
+
+    /* A script that does not compile: the gripper's business, as on a
+     * real one: the daemon serves, with D20 and nothing registered. */
+    args[5] = syntax;
+    REQUIRE(emu_start(&e, exe, args) == 0);
+    REQUIRE(ctl_open(&k, &e) == 0);
+    REQUIRE(emu_open(&c, &e, &emu_tcp) == 0);
+    CHECK_EQ(flags_of(&c) & (D19 | D20), D20);
+    CHECK_EQ(emu_request(&c, ID_ECHO, p, 2, NULL, EMU_REPLY_MS),
+             WSG_E_CMD_UNKNOWN);
+    CHECK_HAS(script_status(&k), "{\"running\":false,\"failed\":true,");
+    /* ...and a good script can be run after it. */
+    RUN_OK(&k, "api.lua");
+    CHECK_EQ(flags_of(&c) & (D19 | D20), D19);
+    CHECK_EQ(emu_request(&c, ID_ECHO, p, 2, NULL, EMU_REPLY_MS),
+             WSG_E_SUCCESS);
+    emu_close(&c);
+    ctl_close(&k);
+    CHECK_EQ(emu_stop(&e), 0);
+}
+
 int main(int argc, char **argv)
 {
     const char *exe = emu_exe(argc, argv);
@@ -1612,6 +1671,10 @@ int main(int argc, char **argv)
     }
     if (all || strcmp(part, "lockstep") == 0) {
         part_lockstep(exe);
+        ran++;
+    }
+    if (all || strcmp(part, "startup") == 0) {
+        part_startup(exe);
         ran++;
     }
     if (!ran) {
