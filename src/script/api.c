@@ -58,6 +58,15 @@ static double api_number(lua_State *L, int arg)
     return v;
 }
 
+/* A number for a motion: NaN goes through, for the axis to refuse with
+ * E_INVALID_PARAMETER, the status the script gets (as a host gets it for
+ * a NaN in a command) rather than an error that would end a script
+ * whose controller computed one. */
+static double api_motion_number(lua_State *L, int arg)
+{
+    return luaL_checknumber(L, arg);
+}
+
 /* The status a motion request leaves the script with: E_SUCCESS when it
  * started (there is no packet to be pending on), else why not. */
 static int api_motion(lua_State *L, uint16_t st)
@@ -72,12 +81,13 @@ static int api_motion(lua_State *L, uint16_t st)
 }
 
 /* The session cmd.send answers: the one whose packet was read last, else
- * the one that sent the gripper anything last. */
+ * (nothing read yet) the one that sent the gripper anything last. NULL
+ * when that one is gone: an answer to a host that left must not go to
+ * another one, which never asked for it. */
 static struct wsg_session *api_host(struct wsg_script *h)
 {
-    struct wsg_session *s = wsg_device_session(h->dev, h->reply_tag);
-
-    return s ? s : wsg_device_session(h->dev, h->dev->last_tag);
+    return wsg_device_session(h->dev,
+                              h->reply_tag ? h->reply_tag : h->dev->last_tag);
 }
 
 static void api_bytes(lua_State *L, const uint8_t *p, int n)
@@ -187,6 +197,47 @@ static int api_etob(lua_State *L)
     return 1;
 }
 
+/* Lua's setmetatable, but a table is never marked for finalization, as
+ * Lua 5.1 did with tables: Lua runs finalizers with hooks off, so one
+ * that loops could never be preempted and would hold the daemon (at a
+ * collection, or in lua_close when the script is stopped). The __gc
+ * field stays in the metatable; the table only is not marked, because
+ * the field is absent at the moment the metatable is set. */
+static int api_setmetatable(lua_State *L)
+{
+    int t = lua_type(L, 2), gc;
+
+    luaL_checktype(L, 1, LUA_TTABLE);
+    luaL_argexpected(L, t == LUA_TNIL || t == LUA_TTABLE, 2, "nil or table");
+    if (luaL_getmetafield(L, 1, "__metatable") != LUA_TNIL)
+        return luaL_error(L, "cannot change a protected metatable");
+    lua_settop(L, 2);
+    /* Raw, as Lua looks for the field: no metamethod of the metatable's
+     * own can hide it or keep it from being taken out. */
+    if (t == LUA_TTABLE) {
+        lua_pushliteral(L, "__gc");
+        gc = lua_rawget(L, 2) != LUA_TNIL;
+    } else {
+        gc = 0;
+    }
+    if (!gc) {
+        lua_settop(L, 2);
+        lua_setmetatable(L, 1);
+        return 1;
+    }
+    /* Stack: t, mt, the finalizer. */
+    lua_pushliteral(L, "__gc");
+    lua_pushnil(L);
+    lua_rawset(L, 2);
+    lua_pushvalue(L, 2);
+    lua_setmetatable(L, 1);
+    lua_pushliteral(L, "__gc");
+    lua_insert(L, -2);
+    lua_rawset(L, 2);
+    lua_settop(L, 1);
+    return 1;
+}
+
 static int api_frexp(lua_State *L)
 {
     int e;
@@ -204,11 +255,16 @@ static int cmd_register(lua_State *L)
     struct wsg_script *h = wsg_script_of(L);
     uint8_t id = api_byte(L, 1);
 
-    if (wsg_device_register(h->dev, id, 1) < 0)
-        return luaL_error(L,
-                          "cmd.register: %02Xh is a command of the "
-                          "firmware",
-                          id);
+    if (wsg_device_register(h->dev, id, 1) < 0) {
+        char msg[64];
+
+        /* Formatted here: lua_pushfstring knows no %02X and would raise
+         * its own error instead of this one. */
+        snprintf(msg, sizeof msg,
+                 "cmd.register: %02Xh is a command of the firmware",
+                 (unsigned)id);
+        return luaL_error(L, "%s", msg);
+    }
     lua_pushboolean(L, 1);
     return 1;
 }
@@ -328,7 +384,7 @@ static int mc_speed(lua_State *L)
         lua_pushnumber(L, wsg_axis_speed(api_axis(L)));
         return 1;
     }
-    v = api_number(L, 1);
+    v = api_motion_number(L, 1);
     st = wsg_device_motion_check(h->dev, 1);
     if (st == WSG_E_SUCCESS)
         st = wsg_axis_request_speed(api_axis(L), v, 0);
@@ -379,7 +435,7 @@ static int mc_stop(lua_State *L)
 static int mc_move(lua_State *L)
 {
     struct wsg_script *h = wsg_script_of(L);
-    double w = api_number(L, 1), v = api_number(L, 2);
+    double w = api_motion_number(L, 1), v = api_motion_number(L, 2);
     lua_Integer flags = luaL_optinteger(L, 3, 0);
     uint16_t st = wsg_device_motion_check(h->dev, 1);
 
@@ -440,7 +496,7 @@ static const luaL_Reg gripper_lib[] = {{"state", gripper_state}, {NULL, NULL}};
 static int grasping_move(lua_State *L)
 {
     struct wsg_script *h = wsg_script_of(L);
-    double w = api_number(L, 1), v = api_number(L, 2);
+    double w = api_motion_number(L, 1), v = api_motion_number(L, 2);
     uint16_t st = wsg_device_motion_check(h->dev, 1);
 
     if (st == WSG_E_SUCCESS)
@@ -448,14 +504,32 @@ static int grasping_move(lua_State *L)
     return api_motion(L, st);
 }
 
+/* The optional force of a grasp or clamp, at arg: set as the force limit
+ * when it is given and the motion may start (st, the status so far). A
+ * NaN sets nothing and refuses the motion, as a NaN width or speed does.
+ * Returns the status. */
+static uint16_t api_grasp_force(lua_State *L, int arg, uint16_t st)
+{
+    double f;
+
+    if (lua_isnoneornil(L, arg))
+        return st;
+    f = api_motion_number(L, arg);
+    if (st != WSG_E_SUCCESS)
+        return st;
+    if (isnan(f))
+        return WSG_E_INVALID_PARAMETER;
+    wsg_axis_set_force_limit(api_axis(L), f);
+    return st;
+}
+
 static int grasping_grasp(lua_State *L)
 {
     struct wsg_script *h = wsg_script_of(L);
-    double w = api_number(L, 1), v = api_number(L, 2);
+    double w = api_motion_number(L, 1), v = api_motion_number(L, 2);
     uint16_t st = wsg_device_motion_check(h->dev, 1);
 
-    if (st == WSG_E_SUCCESS && !lua_isnoneornil(L, 3))
-        wsg_axis_set_force_limit(api_axis(L), api_number(L, 3));
+    st = api_grasp_force(L, 3, st);
     if (st == WSG_E_SUCCESS)
         st = wsg_axis_request_grasp(api_axis(L), w, v, 0);
     return api_motion(L, st);
@@ -469,12 +543,11 @@ static int grasping_clamp(lua_State *L)
     struct wsg_script *h = wsg_script_of(L);
     struct wsg_axis *ax = api_axis(L);
     struct wsg_grasp_window win;
-    double travel = api_number(L, 1);
+    double travel = api_motion_number(L, 1);
     uint16_t st = wsg_device_motion_check(h->dev, 1);
 
-    luaL_argcheck(L, travel >= 0, 1, "travel must not be negative");
-    if (st == WSG_E_SUCCESS && !lua_isnoneornil(L, 2))
-        wsg_axis_set_force_limit(ax, api_number(L, 2));
+    luaL_argcheck(L, !(travel < 0), 1, "travel must not be negative");
+    st = api_grasp_force(L, 2, st);
     win.travel = travel;
     win.tolerance = 0.0;
     if (st == WSG_E_SUCCESS)
@@ -486,7 +559,7 @@ static int grasping_clamp(lua_State *L)
 static int grasping_release(lua_State *L)
 {
     struct wsg_script *h = wsg_script_of(L);
-    double w = api_number(L, 1), v = api_number(L, 2);
+    double w = api_motion_number(L, 1), v = api_motion_number(L, 2);
     uint16_t st = wsg_device_motion_check(h->dev, 1);
 
     if (st == WSG_E_SUCCESS)
@@ -607,6 +680,42 @@ static int open_socket(lua_State *L)
     return 1;
 }
 
+/* ---- require ---- */
+
+/* require's searcher for a script's modules: NAME.lua in the script's
+ * directory, each dot of NAME a subdirectory, as Lua text. It reads the
+ * directory the host keeps, not package.path, which the script can set
+ * (to "/etc/?.lua" or "../?.lua"); with the dots turned into slashes no
+ * name climbs out of the directory. Lua's own searcher would also load a
+ * precompiled chunk, which no sandbox can trust. */
+static int api_searcher(lua_State *L)
+{
+    struct wsg_script *h = wsg_script_of(L);
+    const char *name = luaL_checkstring(L, 1), *path, *c;
+    luaL_Buffer b;
+    FILE *f;
+
+    luaL_buffinit(L, &b);
+    luaL_addstring(&b, h->dir);
+    luaL_addchar(&b, '/');
+    for (c = name; *c; c++)
+        luaL_addchar(&b, *c == '.' ? '/' : *c);
+    luaL_addstring(&b, ".lua");
+    luaL_pushresult(&b);
+    path = lua_tostring(L, -1);
+    f = fopen(path, "r");
+    if (!f) {
+        lua_pushfstring(L, "no file '%s'", path);
+        return 1;
+    }
+    fclose(f);
+    if (luaL_loadfilex(L, path, "t") != LUA_OK)
+        return luaL_error(L, "error loading module '%s' from file '%s':\n\t%s",
+                          name, path, lua_tostring(L, -1));
+    lua_pushvalue(L, -2); /* the loader's second argument: the file */
+    return 2;
+}
+
 /* ---- the state ---- */
 
 /* Lua's own libraries that a script gets; io, debug and the rest of os
@@ -637,13 +746,17 @@ static void set_nil(lua_State *L, const char *table, const char *const *names)
 /* Run by the host in the fresh state, trusted: the compatibility names,
  * load restricted to text, printf, and string.format with the integer
  * conversions of Lua 5.1 and 5.2 ("%d" of 2.5 prints 2 there; Lua 5.4
- * raises an error, which would stop scripts written for the gripper). */
+ * raises an error, which would stop scripts written for the gripper).
+ * load passes its env on only when the script gave one: Lua's load tells
+ * an absent env from a nil one, and a nil one leaves the chunk without
+ * globals. The prelude's locals must not take the names of the globals it
+ * sets (table.unpack is tunpack here, so that unpack is the global). */
 static const char prelude[] =
     "local rawload, output = ...\n"
     "local floor, ceil, mtype = math.floor, math.ceil, math.type\n"
-    "local pack, unpack, format = table.pack, table.unpack, string.format\n"
-    "load = function(chunk, name, mode, env)\n"
-    "  return rawload(chunk, name, 't', env)\n"
+    "local pack, tunpack, format = table.pack, table.unpack, string.format\n"
+    "load = function(chunk, name, mode, ...)\n"
+    "  return rawload(chunk, name, 't', ...)\n"
     "end\n"
     "loadstring = function(s, name) return rawload(s, name, 't') end\n"
     "local function toint(v)\n"
@@ -660,7 +773,7 @@ static const char prelude[] =
     "      if conv:find('[cdiouxX]') then args[i] = toint(args[i]) end\n"
     "    end\n"
     "  end\n"
-    "  return format(fmt, unpack(args, 1, args.n))\n"
+    "  return format(fmt, tunpack(args, 1, args.n))\n"
     "end\n"
     "local sformat = string.format\n"
     "printf = function(fmt, ...) output(sformat(fmt, ...)) end\n"
@@ -753,7 +866,9 @@ void wsg_script_open_api(lua_State *L, struct wsg_script *h)
     set_nil(L, NULL, base_out);
     set_nil(L, LUA_OSLIBNAME, os_out);
     set_nil(L, LUA_LOADLIBNAME, package_out);
-    /* require: modules from the script's directory, Lua text only. */
+    /* require: modules from the script's directory, Lua text only (the
+     * preload, then api_searcher). package.path tells where, for scripts
+     * that read it; changing it changes nothing. */
     lua_getglobal(L, LUA_LOADLIBNAME);
     lua_pushfstring(L, "%s/?.lua", h->dir);
     lua_setfield(L, -2, "path");
@@ -764,6 +879,8 @@ void wsg_script_open_api(lua_State *L, struct wsg_script *h)
     lua_rawseti(L, -2, 4);
     lua_pushnil(L);
     lua_rawseti(L, -2, 3);
+    lua_pushcfunction(L, api_searcher);
+    lua_rawseti(L, -2, 2);
     lua_pop(L, 1);
     luaL_getsubtable(L, -1, "preload");
     lua_pushcfunction(L, open_socket);
@@ -771,6 +888,7 @@ void wsg_script_open_api(lua_State *L, struct wsg_script *h)
     lua_pop(L, 2);
 
     lua_register(L, "print", api_print);
+    lua_register(L, "setmetatable", api_setmetatable);
     lua_register(L, "sleep", api_sleep);
     lua_register(L, "bton", api_bton);
     lua_register(L, "ntob", api_ntob);

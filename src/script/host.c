@@ -59,29 +59,46 @@ static void *script_alloc(void *ud, void *ptr, size_t osize, size_t nsize)
 
 /* Preemption: the body yields when its slice is used up. Where it cannot
  * (a coroutine of the script's own, whose resume would get the yield, or
- * a call from C), it runs on, and a loop that never gets out is ended. */
+ * a call from C), it runs on, owing the yield, and a loop that never gets
+ * out is ended with an error. The yield owed is paid at the body's next
+ * hook, whatever is left of the slice then: the error may come back to a
+ * body that loops on it (pcall around a stuck coroutine), and the slices
+ * would otherwise keep running out in the coroutine, never in the body.
+ * Until the body has paid, every hook outside it raises the error again,
+ * so such a loop costs a hook's instructions a turn, not a slice's. */
 static void script_hook(lua_State *L, lua_Debug *ar)
 {
     struct wsg_script *h = wsg_script_of(L);
+    int body = L == h->co && lua_isyieldable(L);
 
     (void)ar;
-    if (h->budget > WSG_SCRIPT_HOOK_COUNT) {
+    if (body && h->owed) {
+        h->budget = 0;
+    } else if (h->budget > WSG_SCRIPT_HOOK_COUNT) {
         h->budget -= WSG_SCRIPT_HOOK_COUNT;
-        return;
+        if (body || h->stuck < WSG_SCRIPT_STUCK_MAX)
+            return;
     }
-    h->budget = WSG_SCRIPT_SLICE;
-    if (L == h->co && lua_isyieldable(L)) {
+    if (body) {
+        h->budget = WSG_SCRIPT_SLICE;
         h->state = WSG_SCRIPT_RUNNABLE;
         h->preempted++;
         lua_yield(L, 0);
         return;
     }
-    if (++h->stuck >= WSG_SCRIPT_STUCK_MAX)
+    if (h->budget <= WSG_SCRIPT_HOOK_COUNT) {
+        h->budget = WSG_SCRIPT_SLICE;
+        h->owed = 1;
+        h->stuck++;
+    }
+    /* %d: lua_pushfstring knows no %u, and would raise its own error
+     * in place of this one. */
+    if (h->stuck >= WSG_SCRIPT_STUCK_MAX)
         luaL_error(L,
-                   "ran %u slices of %u instructions where it cannot be "
+                   "ran %d slices of %d instructions where it cannot be "
                    "preempted (in a coroutine of its own or a callback): "
                    "stopped",
-                   WSG_SCRIPT_STUCK_MAX, WSG_SCRIPT_SLICE);
+                   (int)WSG_SCRIPT_STUCK_MAX, (int)WSG_SCRIPT_SLICE);
 }
 
 void wsg_script_print(struct wsg_script *h, const char *text, size_t len)
@@ -194,6 +211,7 @@ static void script_resume(struct wsg_script *h, int nargs)
     h->state = WSG_SCRIPT_RUNNING;
     h->budget = WSG_SCRIPT_SLICE;
     h->stuck = 0;
+    h->owed = 0;
     st = lua_resume(h->co, h->L, nargs, &nres);
     if (st == LUA_YIELD) {
         lua_pop(h->co, nres);

@@ -38,6 +38,7 @@ struct wsg_script {
     size_t limit;    /* what the allocator allows: the cap, or past it */
     uint32_t budget; /* instructions left in this slice */
     unsigned stuck;  /* slices run where the script could not yield */
+    int owed;        /* a slice ran out where it could not yield */
     uint64_t preempted;
     uint32_t reply_tag; /* session of the packet read last; 0: none */
     struct wsg_script_packet queue[WSG_SCRIPT_QUEUE];
