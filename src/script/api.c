@@ -751,98 +751,134 @@ static void set_nil(lua_State *L, const char *table, const char *const *names)
  * an absent env from a nil one, and a nil one leaves the chunk without
  * globals. The prelude's locals must not take the names of the globals it
  * sets (table.unpack is tunpack here, so that unpack is the global). */
-static const char prelude[] =
-    "local rawload, output = ...\n"
-    "local floor, ceil, mtype = math.floor, math.ceil, math.type\n"
-    "local pack, tunpack, format = table.pack, table.unpack, string.format\n"
-    "load = function(chunk, name, mode, ...)\n"
-    "  return rawload(chunk, name, 't', ...)\n"
-    "end\n"
-    "loadstring = function(s, name) return rawload(s, name, 't') end\n"
-    "local function toint(v)\n"
-    "  if mtype(v) == 'float' and v == v and v > -2^63 and v < 2^63 then\n"
-    "    return v >= 0 and floor(v) or ceil(v)\n"
-    "  end\n"
-    "  return v\n"
-    "end\n"
-    "string.format = function(fmt, ...)\n"
-    "  local args, i = pack(...), 0\n"
-    "  for conv in tostring(fmt):gmatch('%%[-+ #0]*%d*%.?%d*([%a%%])') do\n"
-    "    if conv ~= '%' then\n"
-    "      i = i + 1\n"
-    "      if conv:find('[cdiouxX]') then args[i] = toint(args[i]) end\n"
-    "    end\n"
-    "  end\n"
-    "  return format(fmt, tunpack(args, 1, args.n))\n"
-    "end\n"
-    "local sformat = string.format\n"
-    "printf = function(fmt, ...) output(sformat(fmt, ...)) end\n"
-    "unpack = table.unpack\n"
-    "table.getn = function(t) return #t end\n"
-    "table.maxn = function(t)\n"
-    "  local n = 0\n"
-    "  for k in pairs(t) do if mtype(k) and k > n then n = k end end\n"
-    "  return n\n"
-    "end\n"
-    "math.pow = function(x, y) return x ^ y end\n"
-    "math.mod = math.fmod\n"
-    "math.log10 = function(x) return math.log(x, 10) end\n"
-    "math.ldexp = function(m, e) return m * 2.0 ^ e end\n"
-    "math.atan2 = math.atan\n"
-    "math.cosh = function(x) return (math.exp(x) + math.exp(-x)) / 2 end\n"
-    "math.sinh = function(x) return (math.exp(x) - math.exp(-x)) / 2 end\n"
-    "math.tanh = function(x)\n"
-    "  if x > 20 then return 1.0 elseif x < -20 then return -1.0 end\n"
-    "  local a, b = math.exp(x), math.exp(-x)\n"
-    "  return (a - b) / (a + b)\n"
-    "end\n"
-    "string.gfind = string.gmatch\n"
-    "local M = 0xFFFFFFFF\n"
-    "local function u(x) return floor(x) & M end\n"
-    "local function fold(op, r, ...)\n"
-    "  for i = 1, select('#', ...) do r = op(r, u(select(i, ...))) end\n"
-    "  return r\n"
-    "end\n"
-    "local function lsh(x, n)\n"
-    "  if n <= -32 or n >= 32 then return 0 end\n"
-    "  if n < 0 then return u(x) >> -n end\n"
-    "  return (u(x) << n) & M\n"
-    "end\n"
-    "bit32 = {\n"
-    "  band = function(...) return fold(function(a, b) return a & b end, M,"
-    " ...) end,\n"
-    "  bor = function(...) return fold(function(a, b) return a | b end, 0,"
-    " ...) end,\n"
-    "  bxor = function(...) return fold(function(a, b) return a ~ b end, 0,"
-    " ...) end,\n"
-    "  bnot = function(x) return ~u(x) & M end,\n"
-    "  lshift = lsh,\n"
-    "  rshift = function(x, n) return lsh(x, -n) end,\n"
-    "  arshift = function(x, n)\n"
-    "    local v = u(x)\n"
-    "    if v >= 0x80000000 then v = v - 0x100000000 end\n"
-    "    if n >= 32 then return v < 0 and M or 0 end\n"
-    "    return floor(v / 2 ^ n) & M\n"
-    "  end,\n"
-    "  extract = function(n, f, w)\n"
-    "    w = w or 1\n"
-    "    return (u(n) >> f) & ((1 << w) - 1)\n"
-    "  end,\n"
-    "  replace = function(n, v, f, w)\n"
-    "    w = w or 1\n"
-    "    local m = ((1 << w) - 1) << f\n"
-    "    return ((u(n) & ~m) | ((u(v) << f) & m)) & M\n"
-    "  end,\n"
-    "  lrotate = function(x, n)\n"
-    "    n = n % 32\n"
-    "    return ((u(x) << n) | (u(x) >> (32 - n))) & M\n"
-    "  end,\n"
-    "}\n"
-    "bit32.btest = function(...) return bit32.band(...) ~= 0 end\n"
-    "bit32.rrotate = function(x, n) return bit32.lrotate(x, -n) end\n";
+static const char *const prelude[] = {
+    "local rawload, output = ...\n",
+    "local floor, ceil, mtype = math.floor, math.ceil, math.type\n",
+    "local pack, tunpack, format = table.pack, table.unpack, string.format\n",
+    "local rawgmatch = string.gmatch\n",
+    "load = function(chunk, name, mode, ...)\n",
+    "  return rawload(chunk, name, 't', ...)\n", "end\n",
+    "loadstring = function(s, name) return rawload(s, name, 't') end\n",
+    "local function toint(v)\n",
+    "  if mtype(v) == 'float' and v == v and v > -2^63 and v < 2^63 then\n",
+    "    return v >= 0 and floor(v) or ceil(v)\n", "  end\n", "  return v\n",
+    "end\n", "string.format = function(fmt, ...)\n",
+    "  local args, i = pack(...), 0\n",
+    "  for conv in rawgmatch(tostring(fmt), '%%[-+ #0]*%d*%.?%d*([%a%%])') "
+    "do\n",
+    "    if conv ~= '%' then\n", "      i = i + 1\n",
+    "      if conv:find('[cdiouxX]') then args[i] = toint(args[i]) end\n",
+    "    end\n", "  end\n", "  return format(fmt, tunpack(args, 1, args.n))\n",
+    "end\n", "local sformat = string.format\n",
+    "printf = function(fmt, ...) output(sformat(fmt, ...)) end\n",
+    "unpack = table.unpack\n", "table.getn = function(t) return #t end\n",
+    "table.maxn = function(t)\n", "  local n = 0\n",
+    "  for k in pairs(t) do if mtype(k) and k > n then n = k end end\n",
+    "  return n\n", "end\n", "math.pow = function(x, y) return x ^ y end\n",
+    "math.mod = math.fmod\n",
+    "math.log10 = function(x) return math.log(x, 10) end\n",
+    "math.ldexp = function(m, e) return m * 2.0 ^ e end\n",
+    "math.atan2 = math.atan\n",
+    "math.cosh = function(x) return (math.exp(x) + math.exp(-x)) / 2 end\n",
+    "math.sinh = function(x) return (math.exp(x) - math.exp(-x)) / 2 end\n",
+    "math.tanh = function(x)\n",
+    "  if x > 20 then return 1.0 elseif x < -20 then return -1.0 end\n",
+    "  local a, b = math.exp(x), math.exp(-x)\n",
+    "  return (a - b) / (a + b)\n", "end\n", "local M = 0xFFFFFFFF\n",
+    "local function u(x) return floor(x) & M end\n",
+    "local function fold(op, r, ...)\n",
+    "  for i = 1, select('#', ...) do r = op(r, u(select(i, ...))) end\n",
+    "  return r\n", "end\n", "local function lsh(x, n)\n",
+    "  if n <= -32 or n >= 32 then return 0 end\n",
+    "  if n < 0 then return u(x) >> -n end\n", "  return (u(x) << n) & M\n",
+    "end\n", "bit32 = {\n",
+    "  band = function(...) return fold(function(a, b) return a & b end, M,",
+    " ...) end,\n",
+    "  bor = function(...) return fold(function(a, b) return a | b end, 0,",
+    " ...) end,\n",
+    "  bxor = function(...) return fold(function(a, b) return a ~ b end, 0,",
+    " ...) end,\n", "  bnot = function(x) return ~u(x) & M end,\n",
+    "  lshift = lsh,\n", "  rshift = function(x, n) return lsh(x, -n) end,\n",
+    "  arshift = function(x, n)\n", "    local v = u(x)\n",
+    "    if v >= 0x80000000 then v = v - 0x100000000 end\n",
+    "    if n >= 32 then return v < 0 and M or 0 end\n",
+    "    return floor(v / 2 ^ n) & M\n", "  end,\n",
+    "  extract = function(n, f, w)\n", "    w = w or 1\n",
+    "    return (u(n) >> f) & ((1 << w) - 1)\n", "  end,\n",
+    "  replace = function(n, v, f, w)\n", "    w = w or 1\n",
+    "    local m = ((1 << w) - 1) << f\n",
+    "    return ((u(n) & ~m) | ((u(v) << f) & m)) & M\n", "  end,\n",
+    "  lrotate = function(x, n)\n", "    n = n % 32\n",
+    "    return ((u(x) << n) | (u(x) >> (32 - n))) & M\n", "  end,\n", "}\n",
+    "bit32.btest = function(...) return bit32.band(...) ~= 0 end\n",
+    "bit32.rrotate = function(x, n) return bit32.lrotate(x, -n) end\n",
+    /* The library's C loops that the count hook cannot preempt and whose
+     * length memory does not bound: Lua's pattern matcher backtracks (a
+     * find of (".-"):rep(10).."b" in 100 bytes runs for hours), and
+     * table.move walks any range of nils. A pattern function is refused
+     * when its worst case, C(n + k, k) steps for k repeating items (one
+     * more unless anchored with ^) on n bytes, exceeds 10^9 (about a
+     * second); a move of more than 2^24 elements is refused. */
+    "local sfind, smatch, sgmatch, sgsub = string.find, string.match,",
+    " string.gmatch, string.gsub\n",
+    "local ssub, tmove, error = string.sub, table.move, error\n",
+    "local function skipset(p, i, n)\n", "  i = i + 1\n",
+    "  if ssub(p, i, i) == '^' then i = i + 1 end\n", "  repeat\n",
+    "    if ssub(p, i, i) == '%' then i = i + 2 else i = i + 1 end\n",
+    "  until i > n or ssub(p, i, i) == ']'\n", "  return i + 1\n", "end\n",
+    "local function repeats(p)\n", "  local k, i, n = 0, 1, #p\n",
+    "  if ssub(p, 1, 1) ~= '^' then k = 1 else i = 2 end\n",
+    "  while i <= n do\n", "    local c, item = ssub(p, i, i), true\n",
+    "    if c == '%' then\n", "      local d = ssub(p, i + 1, i + 1)\n",
+    "      if d == 'b' then i = i + 4; item = false\n",
+    "      elseif d == 'f' then i = skipset(p, i + 2, n); item = false\n",
+    "      else i = i + 2 end\n",
+    "    elseif c == '[' then i = skipset(p, i, n)\n",
+    "    elseif c == '(' or c == ')' then i = i + 1; item = false\n",
+    "    else i = i + 1 end\n", "    local q = item and ssub(p, i, i) or ''\n",
+    "    if q == '*' or q == '+' or q == '-' or q == '?' then\n",
+    "      k = k + 1; i = i + 1\n", "    end\n", "  end\n", "  return k\n",
+    "end\n", "local function guard(fn, s, p)\n",
+    "  if type(s) ~= 'string' and type(s) ~= 'number' then return end\n",
+    "  if type(p) ~= 'string' then return end\n",
+    "  local n, k, cost = #tostring(s), repeats(p), 1\n",
+    "  for j = 1, k do\n", "    cost = cost * (n + j) / j\n",
+    "    if cost > 1e9 then\n",
+    "      error(fn .. ': pattern too costly for a subject of ' .. n ..\n",
+    "            ' bytes (' .. k .. ' repeating items could backtrack for'\n",
+    "            .. ' minutes)', 3)\n", "    end\n", "  end\n", "end\n",
+    "string.find = function(s, p, init, plain)\n",
+    "  if not plain then guard('find', s, p) end\n",
+    "  return sfind(s, p, init, plain)\n", "end\n",
+    "string.match = function(s, p, ...)\n", "  guard('match', s, p)\n",
+    "  return smatch(s, p, ...)\n", "end\n",
+    "string.gmatch = function(s, p, ...)\n", "  guard('gmatch', s, p)\n",
+    "  return sgmatch(s, p, ...)\n", "end\n",
+    "string.gsub = function(s, p, ...)\n", "  guard('gsub', s, p)\n",
+    "  return sgsub(s, p, ...)\n", "end\n", "string.gfind = string.gmatch\n",
+    "table.move = function(a1, f, e, t, a2)\n",
+    "  if math.type(f) and math.type(e) and e - f >= 2^24 then\n",
+    "    error('move: more than 2^24 elements', 2)\n", "  end\n",
+    "  return tmove(a1, f, e, t, a2)\n", "end\n", NULL};
+
+/* lua_load's reader over the prelude's pieces (C99 caps a string literal
+ * at 4095 bytes, so the prelude is an array of them). */
+static const char *prelude_read(lua_State *L, void *ud, size_t *size)
+{
+    const char *const **piece = ud;
+    const char *p = **piece;
+
+    (void)L;
+    if (!p)
+        return NULL;
+    (*piece)++;
+    *size = strlen(p);
+    return p;
+}
 
 void wsg_script_open_api(lua_State *L, struct wsg_script *h)
 {
+    const char *const *piece = prelude;
     static const char *const base_out[] = {"dofile", "loadfile", NULL};
     static const char *const os_out[] = {"execute",   "exit",   "getenv",
                                          "remove",    "rename", "tmpname",
@@ -916,8 +952,7 @@ void wsg_script_open_api(lua_State *L, struct wsg_script *h)
 
     /* The prelude gets the real load and the output, and keeps them to
      * itself. */
-    if (luaL_loadbufferx(L, prelude, sizeof prelude - 1, "=prelude", "t") ==
-        LUA_OK) {
+    if (lua_load(L, prelude_read, &piece, "=prelude", "t") == LUA_OK) {
         lua_getglobal(L, "load");
         lua_pushcfunction(L, api_output);
         lua_call(L, 2, 0);
