@@ -108,6 +108,19 @@ h[0xB8] = function()
   end
 end
 
+-- The library's C loops that no hook preempts are bounded by their
+-- arguments: a backtracking pattern and a move over a vast range are
+-- refused at once; ordinary patterns and a plain find of any size work.
+h[0xB9] = function(id)
+  local backtrack = pcall(string.find, ("a"):rep(100), (".-"):rep(10) .. "b")
+  local quadratic = pcall(string.gsub, ("1"):rep(100000), "%d+x", "")
+  local _, key = pcall(string.match, "key = value", "^(%w+)%s*=%s*(%w+)$")
+  local move = pcall(table.move, {}, 1, 2^40, 2)
+  local plain = string.find(("a"):rep(100000) .. "b", "b", 1, true)
+  local anchored = #(string.match(("x"):rep(100000), "^(x*)$"))
+  wire.reply(id, backtrack, quadratic, key, move, plain, anchored)
+end
+
 h[0xB7] = function(id, p)
   cmd.send(id, etob(E_SUCCESS), p)
 end
