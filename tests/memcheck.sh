@@ -8,6 +8,7 @@
 # files and any report at all fails this script.
 #
 # Usage: memcheck.sh WSGEMU INTEG_DIR [TEST[:TRANSPORT]...]
+#   (integ_script takes its part where the others take a transport)
 #   INTEG_DIR holds the integration test programs; without TESTs, the list
 #   below. Exit status: 0 clean, 1 a test failed or valgrind reported
 #   something, 77 no valgrind here (skipped), 2 usage.
@@ -35,7 +36,10 @@ if [ $# = 0 ]; then
         integ_disconnect:tcp integ_disconnect:udp integ_disconnect:pty \
         integ_streams:tcp integ_streams:udp integ_streams:pty \
         integ_udp integ_pty integ_control integ_settings integ_log \
-        integ_latency integ_together integ_wsgctl integ_fleet
+        integ_latency integ_together integ_wsgctl integ_fleet \
+        integ_script:api integ_script:ifaces integ_script:speed \
+        integ_script:lifecycle integ_script:sandbox integ_script:lockstep \
+        integ_script:startup
 fi
 
 if ! command -v valgrind >/dev/null 2>&1; then

@@ -1651,7 +1651,7 @@ int main(int argc, char **argv)
     const char *part = argc > 2 ? argv[2] : "all";
     int all = strcmp(part, "all") == 0, ran = 0;
 
-    scripts = argc > 3 ? argv[3] : "tests/scripts";
+    scripts = argc > 3 ? argv[3] : WSG_TEST_SCRIPTS;
     if (access(scripts, R_OK) != 0) {
         printf("SKIP: no scripts directory %s\n", scripts);
         return 77;
