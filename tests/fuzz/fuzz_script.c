@@ -16,12 +16,13 @@
  * never raise (a raise here reaches the panic handler, which aborts).
  *
  * Bit 0 clear, packets to registered IDs: a gripper with a script host
- * running the script below (fb_script), which registers B0h..B9h and BBh
- * and answers each from the packet's bytes (an echo, lengths and nested
+ * running the script below (fb_script), which registers B0h..B9h, BBh and
+ * BDh * and answers each from the packet's bytes (an echo, lengths and nested
  * tables, floats through bton and ntob, errors inside pcall, a sleep in
  * simulated time, a loop long enough to be preempted, allocations past the
  * memory cap, speed mode, registering BAh on and off, its own failure or
- * end, what cmd.available and cmd.online say). The input is records as in
+ * end, what cmd.available and cmd.online say, and the rest of its library
+ * called inside pcall with the packet's numbers). The input is records as in
  * harness 2 ([ID][control][length][payload]), wrapped into valid frames
  * and mixed with the firmware's IDs, on two sessions, with time stepped in
  * between. Every answer carries the script's count of packets read, so
@@ -551,14 +552,15 @@ static void fa_run(struct rd *r)
 
 /* ==== (b) packets to registered IDs ==== */
 
-/* The script. Every answer starts with head(s, kind): E_SUCCESS, the
- * marker A5h, the count of packets read before this one (16 bits) and a
- * kind per ID, so the harness matches it to its packet. B3h may send one
- * more packet first, of kind FFh, from inside a pcall. */
-static const char fb_script[] =
+/* The script, in pieces (C99 promises string literals of 4095 bytes
+ * only). Every answer starts with head(s, kind): E_SUCCESS, the marker
+ * A5h, the count of packets read before this one (16 bits) and a kind per
+ * ID, so the harness matches it to its packet. B3h may send one more
+ * packet first, of kind FFh, from inside a pcall. */
+static const char *const fb_script[] = {
     "local socket = require 'socket'\n"
     "local ids = {0xB0, 0xB1, 0xB2, 0xB3, 0xB4, 0xB5, 0xB6, 0xB7, 0xB8,\n"
-    "             0xB9, 0xBB}\n"
+    "             0xB9, 0xBB, 0xBD}\n"
     "for _, id in ipairs(ids) do cmd.register(id) end\n"
     "local seq = 0\n"
     "local function head(s, kind)\n"
@@ -582,7 +584,7 @@ static const char fb_script[] =
     "    out[#out + 1] = ntob(bton({p[i], p[i + 1], p[i + 2], p[i + 3]}))\n"
     "  end\n"
     "  cmd.send(id, head(s, 2), out)\n"
-    "end\n"
+    "end\n",
     "local deep = {{{{{{1}}}}}}\n"
     "H[0xB3] = function(id, p, s)\n"
     "  local tries = {\n"
@@ -643,28 +645,74 @@ static const char fb_script[] =
     "H[0xB9] = function(id, p, s)\n"
     "  if p[1] == 0xEE then error('requested failure') end\n"
     "  if p[1] == 0xED then return true end\n"
+    "  if p[1] == 0xEC then local x = string.rep('x', 1 << 22) end\n"
+    "  if p[1] == 0xEB then\n"
+    "    local t = {}\n"
+    "    for i = 1, 1 << 22 do t[i] = {i} end\n"
+    "  end\n"
     "  cmd.send(id, head(s, 9), #p & 0xFF)\n"
     "end\n"
     "H[0xBB] = function(id, p, s)\n"
     "  local iface = cmd.interface() or '?'\n"
     "  cmd.send(id, head(s, 11), cmd.available(), cmd.online(), "
     "iface:byte(1))\n"
+    "end\n",
+    "local function f(p, i)\n"
+    "  return bton({p[i] or 0, p[i + 1] or 0, p[i + 2] or 0, p[i + 3] or 0})\n"
+    "end\n"
+    "local calls = {\n"
+    "  function(a, b, c) return mc.move(a, b, c) end,\n"
+    "  function(a, b, c) return mc.homing(c % 3) end,\n"
+    "  function(a, b, c) return mc.force(a) end,\n"
+    "  function(a, b, c) return mc.force() end,\n"
+    "  function(a, b, c) return mc.pid(a, b, c) end,\n"
+    "  function(a, b, c) return grasping.grasp(a, b, c) end,\n"
+    "  function(a, b, c) return grasping.release(a, b) end,\n"
+    "  function(a, b, c) return grasping.clamp(a, b) end,\n"
+    "  function(a, b, c) return grasping.move(a, b) end,\n"
+    "  function(a, b, c) return grasping.stop_clamping() end,\n"
+    "  function(a, b, c) return grasping.state() end,\n"
+    "  function(a, b, c) return finger.type(c % 3) end,\n"
+    "  function(a, b, c) return finger.data(c) end,\n"
+    "  function(a, b, c) return finger.power(c % 3, a > 0) end,\n"
+    "  function(a, b, c) return finger.read(c % 2, a) end,\n"
+    "  function(a, b, c) return gripper.state() end,\n"
+    "  function(a, b, c) printf('%d %x %5.2f %s', a, b, c, tostring(a)) end,\n"
+    "  function(a, b, c) print(a, b, c, nil, {}) end,\n"
+    "  function(a, b, c) return bit32.extract(c, a, 3), bit32.lrotate(b, c) "
+    "end,\n"
+    "  function(a, b, c) return cmd.online(), cmd.interface() end,\n"
+    "  function(a, b, c) return mc.speed(), mc.position(), mc.aforce() end,\n"
+    "  function(a, b, c) return mc.stop() end,\n"
+    "  function(a, b, c) return load(string.dump(function() end)) end,\n"
+    "  function(a, b, c) return load('return ' .. c)() end,\n"
+    "  function(a, b, c) return coroutine.wrap(cmd.read)() end,\n"
+    "  function(a, b, c) return coroutine.wrap(sleep)(c) end,\n"
+    "  function(a, b, c) return require('x' .. c) end,\n"
+    "  function(a, b, c) return socket.sleep(c / 1e4) end,\n"
+    "  function(a, b, c) return string.format('%d', b), os.time() end,\n"
+    "  function(a, b, c) return etob(c * 300), ntob(a), math.frexp(b) end,\n"
+    "}\n"
+    "H[0xBD] = function(id, p, s)\n"
+    "  local call = calls[(p[1] or 0) % #calls + 1]\n"
+    "  local ok = pcall(call, f(p, 2), f(p, 6), p[10] or 0)\n"
+    "  cmd.send(id, head(s, 13), ok)\n"
     "end\n"
     "while true do\n"
     "  local id, p = cmd.read()\n"
     "  local s = seq\n"
     "  seq = (seq + 1) & 0xFFFF\n"
     "  if H[id](id, p, s) then return end\n"
-    "end\n";
+    "end\n"};
 
 #define FB_MARK 0xA5u
 /* IDs the script registers at start; BAh only through B8h. */
 static const uint8_t fb_ids[] = {0xB0, 0xB1, 0xB2, 0xB3, 0xB4, 0xB5,
-                                 0xB6, 0xB7, 0xB8, 0xB9, 0xBB};
+                                 0xB6, 0xB7, 0xB8, 0xB9, 0xBB, 0xBD};
 /* What a record's ID byte below 80h picks: the script's IDs, BAh, and
  * BCh, which nothing registers. */
 static const uint8_t fb_pick[] = {0xB0, 0xB1, 0xB2, 0xB3, 0xB4, 0xB5, 0xB6,
-                                  0xB7, 0xB8, 0xB9, 0xBA, 0xBB, 0xBC};
+                                  0xB7, 0xB8, 0xB9, 0xBA, 0xBB, 0xBC, 0xBD};
 #define FB_NPICK (sizeof fb_pick / sizeof fb_pick[0])
 
 #define FB_SESSIONS 2
@@ -736,7 +784,7 @@ static void fb_pop(void)
 
 static int fb_is_script_id(uint8_t id)
 {
-    return id >= 0xB0 && id <= 0xBB;
+    return id >= 0xB0 && id <= 0xBD;
 }
 
 /* B5h's sum, as the script computes it. */
@@ -830,7 +878,7 @@ static void fb_check_answer(const struct fb_entry *e, int si, unsigned kind,
         break;
     case 0xB9:
         FZ_CHECK(kind == 9 && n == 1);
-        FZ_CHECK(b0 != 0xEE && b0 != 0xED);
+        FZ_CHECK(b0 < 0xEB || b0 > 0xEE);
         FZ_CHECK(p[0] == (e->len & 0xFF));
         break;
     case 0xBB: {
@@ -844,6 +892,9 @@ static void fb_check_answer(const struct fb_entry *e, int si, unsigned kind,
         FZ_CHECK(p[2] == (peer[0] == 't' ? 'T' : 'U'));
         break;
     }
+    case 0xBD:
+        FZ_CHECK(kind == 13 && n == 1 && p[0] <= 1);
+        break;
     default:
         FZ_CHECK(0);
     }
@@ -941,8 +992,10 @@ static void fb_wake(void *ctx)
     B.woken = 1;
 }
 
-/* The script ended by itself: only the packets that ask for it end it,
- * B9h EEh with D20 and its error, B9h EDh without. */
+/* The script ended by itself: only the packets that ask for it end it:
+ * B9h EEh with D20 and its error, EDh without, ECh and EBh with D20 and
+ * "not enough memory" (one allocation past the cap, or many small ones,
+ * outside a pcall). */
 static void fb_check_ended(void)
 {
     struct wsg_script_status st;
@@ -956,8 +1009,8 @@ static void fb_check_ended(void)
         return;
     for (i = 0; i < B.flen; i++) {
         e = fb_at(i);
-        if (e->id == 0xB9 && e->len >= 1 &&
-            (e->data[0] == 0xEE || e->data[0] == 0xED))
+        if (e->id == 0xB9 && e->len >= 1 && e->data[0] >= 0xEB &&
+            e->data[0] <= 0xEE)
             break;
         FZ_CHECK(e->orphan);
     }
@@ -965,11 +1018,15 @@ static void fb_check_ended(void)
         fprintf(stderr, "fuzz_script: the script ended unasked: %s\n",
                 st.error ? st.error : "(no error)");
     FZ_CHECK(i < B.flen);
-    if (e->data[0] == 0xEE)
-        FZ_CHECK(st.failed && st.error &&
-                 strstr(st.error, "requested failure") != NULL);
-    else
+    if (e->data[0] == 0xED) {
         FZ_CHECK(!st.failed);
+    } else {
+        if (B.trace)
+            fprintf(stderr, "script error: %s\n", st.error);
+        FZ_CHECK(st.failed && st.error);
+        FZ_CHECK(strstr(st.error, e->data[0] == 0xEE ? "requested failure"
+                                                     : "not enough memory"));
+    }
     if (B.trace)
         fprintf(stderr, "t=%llu script ended%s\n",
                 (unsigned long long)fb_now(), st.failed ? ", failed" : "");
@@ -1067,13 +1124,16 @@ static void fb_start(void)
     const char *tmp = getenv("TMPDIR");
     char path[512], err[512];
     int fd, r;
-    size_t len = sizeof fb_script - 1;
+    size_t k, len;
 
     snprintf(path, sizeof path, "%s/fuzz_script_XXXXXX",
              tmp && *tmp ? tmp : "/tmp");
     fd = mkstemp(path);
     FZ_CHECK(fd >= 0);
-    FZ_CHECK(write(fd, fb_script, len) == (ssize_t)len);
+    for (k = 0; k < sizeof fb_script / sizeof fb_script[0]; k++) {
+        len = strlen(fb_script[k]);
+        FZ_CHECK(write(fd, fb_script[k], len) == (ssize_t)len);
+    }
     close(fd);
     r = wsg_script_start(B.h, path, err, sizeof err);
     unlink(path);

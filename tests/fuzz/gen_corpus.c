@@ -12,6 +12,7 @@
  *
  *   ./build/tests/fuzz/fuzz_gen_corpus tests/fuzz/corpus
  */
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -216,12 +217,12 @@ static void gen_each_command(const char *dir)
 /* ---- the script harness (fuzz_script.c) ---- */
 
 /* Its record's ID byte: below 80h an index into the script's IDs
- * (fb_pick: B0h..BCh in order), from 80h a firmware ID of fuzz_ids. */
+ * (fb_pick: B0h..BDh in order), from 80h a firmware ID of fuzz_ids. */
 static uint8_t sc_sel(uint8_t id)
 {
     size_t k;
 
-    if (id >= 0xB0 && id <= 0xBC)
+    if (id >= 0xB0 && id <= 0xBD)
         return (uint8_t)(id - 0xB0);
     for (k = 0; k < FUZZ_NIDS && fuzz_ids[k] != id; k++)
         ;
@@ -459,7 +460,22 @@ static void gen_script(const char *dir)
     sc_rec1(&g, 0xB6, SC_CTL(0, 1, 0), 30);
     sc_rec(&g, WSG_CMD_FAST_STOP, SC_CTL(1, 1, 0), NULL, 0);
     sc_recf(&g, 0xB7, SC_CTL(0, 1, 0), 10.0f, 0);
+    sc_rec1(&g, 0xB9, SC_CTL(0, 1, 0), 0xEC);
+    sc_rec1(&g, 0xB0, SC_CTL(0, 1, SC_RESTART), 1);
+    sc_rec1(&g, 0xB9, SC_CTL(0, 1, 0), 0xEB);
     sc_save(&g, dir, "script-speed-memory");
+
+    /* The rest of the library, each function once, homed. */
+    sc_begin(&g, 0x02);
+    for (i = 0; i < 30; i++) {
+        uint8_t p[10] = {(uint8_t)i};
+
+        wsg_put_f32(p + 1, i % 2 ? 40.0f : -1.0f);
+        wsg_put_f32(p + 5, i % 3 ? 50.0f : NAN);
+        p[9] = (uint8_t)(i * 7);
+        sc_rec(&g, 0xBD, SC_CTL((unsigned)i & 1u, 2, 0), p, sizeof p);
+    }
+    sc_save(&g, dir, "script-library");
 }
 
 int main(int argc, char **argv)
