@@ -35,7 +35,7 @@
  * Set FUZZ_TRACE in the environment to print the events of a replayed
  * input.
  */
-#define _POSIX_C_SOURCE 200809L /* mkstemp */
+#define _POSIX_C_SOURCE 200809L /* mkdtemp */
 
 #include <errno.h>
 #include <math.h>
@@ -1117,26 +1117,32 @@ static void fb_feed(int si, const uint8_t *pkt, size_t n, int datagram)
     fb_run(FB_RUNS);
 }
 
-/* The script's file: written for each start and removed once it is loaded
- * (the host reads it at start only), so no run leaves one behind. */
+/* The script's file: written for each start into a directory of its own
+ * and removed with it once loaded (the host reads it at start only), so
+ * no run leaves one behind, and its require finds no module of anyone
+ * else's there. */
 static void fb_start(void)
 {
     const char *tmp = getenv("TMPDIR");
-    char path[512], err[512];
-    int fd, r;
+    char dir[512], path[600], err[512];
+    FILE *f;
+    int r;
     size_t k, len;
 
-    snprintf(path, sizeof path, "%s/fuzz_script_XXXXXX",
+    snprintf(dir, sizeof dir, "%s/fuzz_script_XXXXXX",
              tmp && *tmp ? tmp : "/tmp");
-    fd = mkstemp(path);
-    FZ_CHECK(fd >= 0);
+    FZ_CHECK(mkdtemp(dir) != NULL);
+    snprintf(path, sizeof path, "%s/fuzz.lua", dir);
+    f = fopen(path, "w");
+    FZ_CHECK(f != NULL);
     for (k = 0; k < sizeof fb_script / sizeof fb_script[0]; k++) {
         len = strlen(fb_script[k]);
-        FZ_CHECK(write(fd, fb_script[k], len) == (ssize_t)len);
+        FZ_CHECK(fwrite(fb_script[k], 1, len, f) == len);
     }
-    close(fd);
+    FZ_CHECK(fclose(f) == 0);
     r = wsg_script_start(B.h, path, err, sizeof err);
     unlink(path);
+    rmdir(dir);
     if (r != 0)
         fprintf(stderr, "fuzz_script: the script did not start: %s\n", err);
     FZ_CHECK(r == 0);
