@@ -3,6 +3,8 @@
 #  1. against the wsgemu and wsgref it finds beside itself;
 #  2. attached (--attach READY --pid PID, --no-fleet) to a wsgemu this
 #     script starts, with every interface, so no row may be n/a either.
+# Both include the script rows (a wsgemu --script of the bench's own each
+# time, with tests/scripts/bench_echo.lua and bench_pd.lua): about 5 s.
 # It checks that each run ends with status 0 and that every row of the
 # table is there with a number in the emulator column (and the reference
 # column where the row has one). No figure is compared with its target:
@@ -72,6 +74,20 @@ check_rows() {
     check "x100: speed-up (simulated/wall)" no
     check "RSS (MiB)" yes
     check "peak RSS, VmHWM (MiB)" yes
+    check_script
+}
+
+# The script rows: the round trip's reference column is the 43h.
+check_script() {
+    check "script B0h round trip median (us)" yes
+    check "script B0h round trip p99 (us)" yes
+    check "script in cmd.read: timer wakes" no
+    for r in 250 500 1000 2000; do
+        check "script PD $r Hz: answers/s" no
+        check "script PD $r Hz: answered (%)" no
+        check "script PD $r Hz: overruns" no
+    done
+    check "script PD: top rate sustained (1/s)" no
 }
 
 check_fleet() {

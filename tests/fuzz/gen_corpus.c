@@ -4,11 +4,15 @@
  * table with sensible parameters (after a homing, so the motion commands
  * get past E_NOT_INITIALIZED), and homing, grasp, FAST STOP and stream
  * sequences. Each scenario is written in both harnesses' input formats.
+ * corpus/script has the script harness's seeds (fuzz_script.c): values for
+ * cmd.send's flattening, and each of its script's IDs, a full queue, a
+ * preempted loop, the script's failure and end, orphaned answers.
  * The output is committed; rebuild it only to change the seeds (every
  * build compiles this program, so it stays in step with the harnesses):
  *
  *   ./build/tests/fuzz/fuzz_gen_corpus tests/fuzz/corpus
  */
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -210,6 +214,270 @@ static void gen_each_command(const char *dir)
     }
 }
 
+/* ---- the script harness (fuzz_script.c) ---- */
+
+/* Its record's ID byte: below 80h an index into the script's IDs
+ * (fb_pick: B0h..BDh in order), from 80h a firmware ID of fuzz_ids. */
+static uint8_t sc_sel(uint8_t id)
+{
+    size_t k;
+
+    if (id >= 0xB0 && id <= 0xBD)
+        return (uint8_t)(id - 0xB0);
+    for (k = 0; k < FUZZ_NIDS && fuzz_ids[k] != id; k++)
+        ;
+    if (k == FUZZ_NIDS)
+        abort();
+    return (uint8_t)(0x80 + (k + FUZZ_NIDS - 0x80 % FUZZ_NIDS) % FUZZ_NIDS);
+}
+
+/* Control byte: the session, the steps after (index as fuzz_bench's),
+ * and the event (fuzz_script.c's list). */
+#define SC_CTL(sess, steps, ev) ((uint8_t)((sess) | (steps) << 1 | (ev) << 4))
+#define SC_DATAGRAM             9
+#define SC_BAD_CRC              10
+#define SC_SPLIT                11
+#define SC_RESTART              12
+#define SC_STOP                 13
+#define SC_CLOSE                14
+#define SC_RESET                15
+
+struct sgen {
+    uint8_t b[GEN_MAX];
+    size_t n;
+};
+
+static void sc_begin(struct sgen *g, uint8_t cfg)
+{
+    g->b[0] = cfg;
+    g->n = 1;
+}
+
+static void sc_bytes(struct sgen *g, const void *p, size_t len)
+{
+    if (g->n + len > GEN_MAX)
+        abort();
+    memcpy(g->b + g->n, p, len);
+    g->n += len;
+}
+
+static void sc_rec(struct sgen *g, uint8_t id, uint8_t ctl, const void *p,
+                   size_t len)
+{
+    uint8_t h[3];
+
+    h[0] = sc_sel(id);
+    h[1] = ctl;
+    h[2] = (uint8_t)len;
+    sc_bytes(g, h, 3);
+    sc_bytes(g, p, len);
+}
+
+static void sc_rec1(struct sgen *g, uint8_t id, uint8_t ctl, uint8_t b)
+{
+    sc_rec(g, id, ctl, &b, 1);
+}
+
+static void sc_recf(struct sgen *g, uint8_t id, uint8_t ctl, float v,
+                    uint8_t extra)
+{
+    uint8_t p[5];
+
+    wsg_put_f32(p, v);
+    p[4] = extra;
+    sc_rec(g, id, ctl, p, sizeof p);
+}
+
+static void sc_save(const struct sgen *g, const char *dir, const char *name)
+{
+    gen_write(dir, "script", name, g->b, g->n);
+}
+
+static void gen_script(const char *dir)
+{
+    static const uint8_t floats[12] = {0x00, 0x00, 0xC0, 0x3F,  /* 1.5 */
+                                       0x01, 0x00, 0xC0, 0x7F,  /* NaN */
+                                       0x00, 0x00, 0x00, 0x80}; /* -0 */
+    /* cmd.send's values (fa_value's kinds: low nibble kind, high nibble
+     * argument). First the mode byte, the argument count, the cap (an
+     * index into fa_cap's table, 14: 65535; or bit 4 and 16 bits), the
+     * error buffer (an index, 4: 128 bytes), the first argument sent. */
+    static const uint8_t fl_basic[] = {
+        0x01, 4,    14,  4,    0,                /* 4 arguments */
+        0x02, 5,                                 /* 5 */
+        0x11,                                    /* true */
+        0x08, 3,    'a', 0,    'b',              /* "a\0b" */
+        0x3A, 0x02, 1,   0x06, 2,   0x08, 1, 'x' /* {1, 2.0, "x"} */
+    };
+    static const uint8_t fl_deep5[] = {
+        0x01, 1,    14,   3,    0,            /* 1 argument */
+        0x1A, 0x1A, 0x1A, 0x1A, 0x1A, 0x02, 9 /* {{{{{9}}}}}: sent */
+    };
+    static const uint8_t fl_deep6[] = {
+        0x01, 1,    14,   3,    0,                  /* 1 argument */
+        0x1A, 0x1A, 0x1A, 0x1A, 0x1A, 0x1A, 0x02, 9 /* 6 deep: refused */
+    };
+    static const uint8_t fl_errors[] = {
+        0x01, 3,   14, 4, 1, /* 3 arguments, from the second */
+        0x0D,                /* a function, not sent */
+        0x02, 200,           /* 200 */
+        0x83                 /* 256 */
+    };
+    static const uint8_t fl_floats[] = {
+        0x01, 6,    14,   4,    0, /* 6 arguments */
+        0x05, 0x15, 0x45, 0x85,    /* 0.0, -0.0, 255.0, 127.0 */
+        0x06, 7,    0x16, 7        /* 7.0, 7.5 */
+    };
+    static const uint8_t fl_holes[] = {
+        0x01, 3,    14,   4,    0,                /* 3 arguments */
+        0x3B, 0x00, 0x02, 2,    0x00, 2, 0x02, 7, /* {nil, 2, nil}, t[6] = 7 */
+        0x2C, 0x02, 1,    0x02, 2,            /* {1, 2} with __len, __index */
+        0x4A, 0x02, 1,    0x00, 0x02, 3, 0x00 /* {1, nil, 3, nil} */
+    };
+    static const uint8_t fl_cycle[] = {
+        0x01, 1,    14,   4, 0, /* 1 argument */
+        0x2A, 0x0E, 0x02, 1     /* t = {t, 1} */
+    };
+    static const uint8_t fl_cap[] = {
+        0x01, 2,    0x10 | 14, 0xFF, 0xFF, 4, 0, /* 2 arguments, cap 65535 */
+        0x09, 0xFE, 0xFF,                        /* 65534 bytes of 00 */
+        0x1A, 0x02, 7                            /* {7}: 65535 in all */
+    };
+    static const uint8_t fl_over[] = {
+        0x01, 2,    14,   4, 0, /* 2 arguments */
+        0x19, 0x00, 0x00,       /* 65536 bytes of 11h */
+        0x02, 1                 /* 1 */
+    };
+    static const uint8_t fl_other[] = {
+        0x01, 7,    15,   2, 0, /* 7 arguments, cap 65536 */
+        0x0F, 0x1F, 0x2F,       /* userdata, light userdata, thread */
+        0x05, 0x15,             /* 0.0, -0.0 */
+        0x45, 0x65,             /* 255.0, 256.0 */
+        0x0D                    /* a C function */
+    };
+    struct sgen g;
+    uint8_t big[255];
+    int i;
+
+    gen_write(dir, "script", "flatten-basic", fl_basic, sizeof fl_basic);
+    gen_write(dir, "script", "flatten-deep-5", fl_deep5, sizeof fl_deep5);
+    gen_write(dir, "script", "flatten-deep-6", fl_deep6, sizeof fl_deep6);
+    gen_write(dir, "script", "flatten-errors", fl_errors, sizeof fl_errors);
+    gen_write(dir, "script", "flatten-floats", fl_floats, sizeof fl_floats);
+    gen_write(dir, "script", "flatten-holes-meta", fl_holes, sizeof fl_holes);
+    gen_write(dir, "script", "flatten-cycle", fl_cycle, sizeof fl_cycle);
+    gen_write(dir, "script", "flatten-cap", fl_cap, sizeof fl_cap);
+    gen_write(dir, "script", "flatten-over-cap", fl_over, sizeof fl_over);
+    gen_write(dir, "script", "flatten-other", fl_other, sizeof fl_other);
+
+    /* Each of the script's IDs, homed first (speed mode needs it). */
+    for (i = 0; i < (int)sizeof big; i++)
+        big[i] = (uint8_t)i;
+    sc_begin(&g, 0x02);
+    sc_rec(&g, 0xB0, SC_CTL(0, 2, 0), "echo", 4);
+    sc_rec(&g, 0xB0, SC_CTL(1, 2, 0), big, sizeof big);
+    sc_rec(&g, 0xB1, SC_CTL(0, 2, 0), "\xC8\x01\x02", 3);
+    sc_rec(&g, 0xB1, SC_CTL(1, 2, 0), NULL, 0);
+    sc_rec(&g, 0xB2, SC_CTL(0, 2, 0), floats, sizeof floats);
+    sc_rec1(&g, 0xB3, SC_CTL(0, 2, 0), 5);
+    sc_rec1(&g, 0xB3, SC_CTL(1, 2, 0), 200);
+    sc_rec1(&g, 0xB4, SC_CTL(0, 4, 0), 8);
+    sc_rec1(&g, 0xB5, SC_CTL(0, 2, 0), 3);
+    sc_rec1(&g, 0xB6, SC_CTL(0, 2, 0), 2);
+    sc_recf(&g, 0xB7, SC_CTL(0, 6, 0), 20.0f, 0);
+    sc_recf(&g, 0xB7, SC_CTL(0, 4, 0), -20.0f, 1);
+    sc_rec1(&g, 0xB8, SC_CTL(0, 1, 0), 1);
+    sc_rec(&g, 0xBA, SC_CTL(1, 1, 0), "hi", 2);
+    sc_rec1(&g, 0xB8, SC_CTL(0, 1, 0), 0);
+    sc_rec(&g, 0xBA, SC_CTL(0, 1, 0), "hi", 2);
+    sc_rec(&g, 0xBB, SC_CTL(1, 1, 0), NULL, 0);
+    sc_rec1(&g, 0xB9, SC_CTL(0, 1, 0), 3);
+    sc_rec(&g, 0xBC, SC_CTL(0, 1, 0), NULL, 0);
+    sc_rec(&g, WSG_CMD_GET_SYSTEM_STATE, SC_CTL(0, 1, 0), NULL, 0);
+    sc_save(&g, dir, "script-each-id");
+
+    /* A sleeping script and 70 packets: the queue fills, E_OVERRUN. */
+    sc_begin(&g, 0);
+    sc_rec1(&g, 0xB4, SC_CTL(0, 0, 0), 200);
+    for (i = 0; i < 70; i++) {
+        sc_rec1(&g, i % 3 ? 0xB0 : 0xBB, SC_CTL((unsigned)i & 1u, 0, 0),
+                (uint8_t)i);
+    }
+    sc_rec(&g, WSG_CMD_GET_WIDTH, SC_CTL(0, 7, 0), NULL, 0);
+    sc_save(&g, dir, "script-queue-full");
+
+    /* A loop preempted with packets behind it. */
+    sc_begin(&g, 0);
+    sc_rec1(&g, 0xB5, SC_CTL(0, 0, 0), 255);
+    sc_rec1(&g, 0xB0, SC_CTL(1, 0, 0), 1);
+    sc_rec(&g, 0xBB, SC_CTL(0, 1, 0), NULL, 0);
+    sc_rec1(&g, 0xB5, SC_CTL(1, 5, 0), 40);
+    sc_rec(&g, 0xBB, SC_CTL(0, 1, 0), NULL, 0);
+    sc_save(&g, dir, "script-preempted");
+
+    /* Failure (D20), the IDs unknown, a restart; an end of its own. */
+    sc_begin(&g, 0);
+    sc_rec1(&g, 0xB9, SC_CTL(0, 1, 0), 0xEE);
+    sc_rec1(&g, 0xB0, SC_CTL(0, 1, 0), 1);
+    sc_rec(&g, WSG_CMD_GET_SYSTEM_STATE, SC_CTL(1, 1, 0), NULL, 0);
+    sc_rec1(&g, 0xB0, SC_CTL(0, 1, SC_RESTART), 2);
+    sc_rec1(&g, 0xB9, SC_CTL(1, 1, 0), 0xED);
+    sc_rec1(&g, 0xB1, SC_CTL(1, 1, 0), 3);
+    sc_rec1(&g, 0xB1, SC_CTL(1, 1, SC_RESTART), 4);
+    sc_rec1(&g, 0xB0, SC_CTL(0, 1, SC_STOP), 5);
+    sc_save(&g, dir, "script-fail-end-restart");
+
+    /* Answers whose session closed: to the other session, or nowhere. */
+    sc_begin(&g, 0);
+    sc_rec1(&g, 0xB4, SC_CTL(1, 0, SC_CLOSE), 40);
+    sc_rec1(&g, 0xB0, SC_CTL(0, 5, 0), 1);
+    sc_rec1(&g, 0xB4, SC_CTL(1, 0, SC_CLOSE), 40);
+    sc_rec1(&g, 0xB3, SC_CTL(1, 5, SC_CLOSE), 1);
+    sc_rec1(&g, 0xB0, SC_CTL(0, 1, 0), 2);
+    sc_save(&g, dir, "script-orphans");
+
+    /* 07h, then the script's IDs refused on that connection only; a
+     * datagram, a split frame, a broken checksum, a power cycle. */
+    sc_begin(&g, 0);
+    sc_rec(&g, WSG_CMD_DISCONNECT, SC_CTL(0, 1, 0), NULL, 0);
+    sc_rec1(&g, 0xB0, SC_CTL(0, 1, 0), 1);
+    sc_rec1(&g, 0xB0, SC_CTL(1, 1, SC_DATAGRAM), 2);
+    sc_rec(&g, 0xB1, SC_CTL(1, 1, SC_SPLIT), "split", 5);
+    sc_rec1(&g, 0xB0, SC_CTL(1, 1, SC_BAD_CRC), 3);
+    sc_rec1(&g, 0xB0, SC_CTL(1, 1, SC_RESET), 4);
+    sc_rec1(&g, 0xB0, SC_CTL(0, 1, SC_CLOSE), 5);
+    sc_rec1(&g, 0xB0, SC_CTL(0, 1, 0), 6);
+    sc_save(&g, dir, "script-transports");
+
+    /* Speed mode against the host's commands, and memory past the cap. */
+    sc_begin(&g, 0x02);
+    sc_recf(&g, 0xB7, SC_CTL(0, 6, 0), 30.0f, 0);
+    sc_rec(&g, WSG_CMD_STOP, SC_CTL(1, 1, 0), NULL, 0);
+    sc_recf(&g, 0xB7, SC_CTL(0, 7, 0), -80.0f, 0);
+    sc_rec(&g, WSG_CMD_GET_WIDTH, SC_CTL(1, 1, 0), NULL, 0);
+    sc_rec1(&g, 0xB6, SC_CTL(0, 1, 0), 255);
+    sc_rec1(&g, 0xB6, SC_CTL(0, 1, 0), 60);
+    sc_rec1(&g, 0xB6, SC_CTL(0, 1, 0), 30);
+    sc_rec(&g, WSG_CMD_FAST_STOP, SC_CTL(1, 1, 0), NULL, 0);
+    sc_recf(&g, 0xB7, SC_CTL(0, 1, 0), 10.0f, 0);
+    sc_rec1(&g, 0xB9, SC_CTL(0, 1, 0), 0xEC);
+    sc_rec1(&g, 0xB0, SC_CTL(0, 1, SC_RESTART), 1);
+    sc_rec1(&g, 0xB9, SC_CTL(0, 1, 0), 0xEB);
+    sc_save(&g, dir, "script-speed-memory");
+
+    /* The rest of the library, each function once, homed. */
+    sc_begin(&g, 0x02);
+    for (i = 0; i < 30; i++) {
+        uint8_t p[10] = {(uint8_t)i};
+
+        wsg_put_f32(p + 1, i % 2 ? 40.0f : -1.0f);
+        wsg_put_f32(p + 5, i % 3 ? 50.0f : NAN);
+        p[9] = (uint8_t)(i * 7);
+        sc_rec(&g, 0xBD, SC_CTL((unsigned)i & 1u, 2, 0), p, sizeof p);
+    }
+    sc_save(&g, dir, "script-library");
+}
+
 int main(int argc, char **argv)
 {
     /* README's Homing request, and one with a SIZE above any command. */
@@ -278,5 +546,7 @@ int main(int argc, char **argv)
     gen_cmd(&g, WSG_CMD_GET_WIDTH,
             CTL_STEPS(STEPS_10) | CTL_WORLD(WORLD_CLOSE), NULL, 0);
     gen_save(&g, dir, "seq-fault-close");
+
+    gen_script(dir);
     return 0;
 }

@@ -11,11 +11,14 @@
  * alike); pipelined TCP throughput; the jitter of a 10 ms auto-update
  * stream (both streams at once); idle wakes and CPU; the model's step rate
  * while moving (control channel "stats"); a time-scaled grasp cycle;
- * memory; and a fleet of grippers in one process (--grippers). Figures
- * with a target get "ok" or "MISSED"; a missed target is not an error: this
- * is a measuring tool. It fails (status 1) only when something could not be
- * measured: a server that does not start, a reply that is missing or
- * malformed. Every wait has a timeout. See usage() for the options.
+ * memory; scripts on the gripper (a registered ID's round trip beside
+ * 43h's, the daemon's wakes while its script waits, a PD script driven at
+ * rising rates); and a fleet of grippers in one process (--grippers).
+ * Figures with a target get "ok" or "MISSED"; a missed target is not an
+ * error: this is a measuring tool. It fails (status 1) only when something
+ * could not be measured: a server that does not start, a reply that is
+ * missing or malformed. Every wait has a timeout. See usage() for the
+ * options.
  *
  * With --attach READY it measures a wsgemu that is already running instead
  * of starting one: READY is the ready line that emulator printed, and the
@@ -27,13 +30,13 @@
  * old scale back after). A row whose interface or process was not given
  * is n/a with a note on stderr, and that is no failure. The motion rows
  * home and move the attached gripper. The fleet rows always start their
- * own wsgemu --grippers N.
+ * own wsgemu --grippers N, and the script rows their own wsgemu --script.
  *
  * This file: the options, finding the programs, choosing the CPUs, --attach,
  * starting the servers, the order of the measurements, and the messages
  * and clock every file uses. The others: servers.c, links.c, table.c, and
- * one file per group of figures (traffic.c, idle.c, motion.c, fleet.c);
- * wsgbench.h, what they share.
+ * one file per group of figures (traffic.c, idle.c, motion.c, fleet.c,
+ * script.c); wsgbench.h, what they share.
  */
 #define _GNU_SOURCE /* sched_setaffinity, pipe2, prctl, strndup */
 
@@ -60,6 +63,11 @@
 #include <sys/wait.h>
 #include <time.h>
 #include <unistd.h>
+
+/* The bench's scripts: the source tree's, as CMake says where it is. */
+#ifndef WSG_BENCH_SCRIPTS
+#define WSG_BENCH_SCRIPTS "tests/scripts"
+#endif
 
 void msg(const char *fmt, ...)
 {
@@ -120,10 +128,14 @@ static void usage(FILE *out)
         "  --move-seconds S       window while the fingers move (default 4)\n"
         "  --fleet N              grippers in the fleet rows (default 1000)\n"
         "  --no-fleet             skip the fleet rows\n"
+        "  --scripts DIR          where bench_echo.lua and bench_pd.lua are\n"
+        "                         (default: the source tree's tests/scripts)\n"
+        "  --script-seconds S     each rate of the PD script (default 3)\n"
+        "  --no-script            skip the script rows\n"
         "  --quick                1000 samples, 0.5 s throughput, 2 s "
         "jitter,\n"
-        "                         1 s idle, 1 s moving, fleet of 20 (options\n"
-        "                         given explicitly still win)\n"
+        "                         1 s idle, 1 s moving, 0.5 s per PD rate,\n"
+        "                         fleet of 20 (explicit options still win)\n"
         "  -h, --help             this text\n"
         "\n"
         "Rows: 43h latency (median, p99, max) over TCP, UDP and the pty;\n"
@@ -135,6 +147,14 @@ static void usage(FILE *out)
         "\"part 40\" and \"time\"): simulated/wall time; VmRSS and VmHWM;\n"
         "with --grippers N: idle wakes and CPU, RSS, homing all, then a\n"
         "tenth and then all of them moving (CPU %, steps/s, overruns).\n"
+        "Scripts, each on a wsgemu --script of its own: B0h answered by\n"
+        "bench_echo.lua against 43h on the same connection (the reference\n"
+        "column of these rows is the 43h), median and p99; the timer\n"
+        "wakes (control \"stats\") while the script waits in cmd.read;\n"
+        "bench_pd.lua, a PD step on mc.speed per B1h as UMI's script,\n"
+        "driven at 250, 500, 1000 and 2000 Hz: answers/s, % answered,\n"
+        "overruns, and the highest rate with 99% answered at 99% of the\n"
+        "rate and no overrun.\n"
         "\n"
         "Both servers run on one CPU and the bench on another when there\n"
         "are two. Exit status: 0 when every figure was measured; 1 when a\n"
@@ -152,7 +172,8 @@ static void usage(FILE *out)
         "and put back after. The moving and x100 rows home, move and grasp\n"
         "the attached gripper and leave a 40 mm part in it (control \"part\n"
         "40\"): attach only to a test gripper. The fleet rows still start\n"
-        "their own wsgemu --grippers N (--emu), skipped when there is none.\n",
+        "their own wsgemu --grippers N (--emu), and the script rows their\n"
+        "own wsgemu --script, skipped when there is none.\n",
         out);
 }
 
@@ -182,6 +203,9 @@ static int parse_opts(struct opts *o, int argc, char **argv)
         {"move-seconds", required_argument, NULL, 'm'},
         {"fleet", required_argument, NULL, 'f'},
         {"no-fleet", no_argument, NULL, 'F'},
+        {"scripts", required_argument, NULL, 'S'},
+        {"script-seconds", required_argument, NULL, 's'},
+        {"no-script", no_argument, NULL, 'N'},
         {"quick", no_argument, NULL, 'q'},
         {"help", no_argument, NULL, 'h'},
         {NULL, 0, NULL, 0}};
@@ -190,7 +214,8 @@ static int parse_opts(struct opts *o, int argc, char **argv)
 
     /* -1: not given; the defaults depend on --quick. */
     o->samples = o->inflight = o->fleet = o->pid = -1;
-    o->tput_s = o->jitter_s = o->idle_s = o->move_s = -1;
+    o->tput_s = o->jitter_s = o->idle_s = o->move_s = o->script_s = -1;
+    o->scripts = WSG_BENCH_SCRIPTS;
     while ((c = getopt_long(argc, argv, "h", lo, NULL)) != -1) {
         switch (c) {
         case 'e':
@@ -230,6 +255,7 @@ static int parse_opts(struct opts *o, int argc, char **argv)
         case 'j':
         case 'i':
         case 'm':
+        case 's':
             if (parse_num(optarg, c == 'm' ? 0.2 : 0.1, 3600, &v) < 0) {
                 msg("not a number of seconds in range: \"%s\"", optarg);
                 return -1;
@@ -237,7 +263,14 @@ static int parse_opts(struct opts *o, int argc, char **argv)
             *(c == 't'   ? &o->tput_s
               : c == 'j' ? &o->jitter_s
               : c == 'i' ? &o->idle_s
+              : c == 's' ? &o->script_s
                          : &o->move_s) = v;
+            break;
+        case 'S':
+            o->scripts = optarg;
+            break;
+        case 'N':
+            o->no_script = 1;
             break;
         case 'F':
             o->fleet = 0;
@@ -271,6 +304,7 @@ static int parse_opts(struct opts *o, int argc, char **argv)
     DEF(idle_s, 10.0, 1.0);
     DEF(move_s, 4.0, 1.0);
     DEF(fleet, 1000, 20);
+    DEF(script_s, 3.0, 0.5);
 #undef DEF
     return 0;
 }
@@ -298,13 +332,14 @@ static int find_exes(struct bench *b)
                               self) >= (int)sizeof b->ref_exe)
         return -1;
     if (access(b->emu_exe, X_OK) < 0) {
-        /* Attached, only the fleet rows start one. */
+        /* Attached, only the fleet and script rows start one. */
         if (b->attach && !b->o.emu) {
-            if (b->o.fleet > 0)
-                msg("cannot run %s: %s: fleet rows skipped (give --emu "
-                    "PATH)",
+            if (b->o.fleet > 0 || !b->o.no_script)
+                msg("cannot run %s: %s: fleet and script rows skipped "
+                    "(give --emu PATH)",
                     b->emu_exe, strerror(errno));
             b->o.fleet = 0;
+            b->o.no_script = 1;
         } else {
             msg("cannot run %s: %s (give --emu PATH)", b->emu_exe,
                 strerror(errno));
@@ -542,6 +577,8 @@ int main(int argc, char **argv)
     for (s = 0; s < 2; s++)
         if (server_stop(&b.srv[s]) < 0)
             b.failures++;
+    if (!b.o.no_script && bench_script(&b) < 0)
+        b.failures++;
     if (b.o.fleet > 0 && bench_fleet(&b) < 0)
         b.failures++;
     print_table(&b);

@@ -50,6 +50,9 @@ struct opts {
     double tput_s, jitter_s, idle_s, move_s;
     long fleet;
     int quick;
+    const char *scripts; /* where bench_echo.lua and bench_pd.lua are */
+    double script_s;     /* each rate of the PD script */
+    int no_script;
 };
 
 struct server {
@@ -194,5 +197,9 @@ int bench_timescale(struct bench *b);
 /* ---- the fleet (fleet.c) ---- */
 
 int bench_fleet(struct bench *b);
+
+/* ---- scripts on the gripper (script.c) ---- */
+
+int bench_script(struct bench *b);
 
 #endif
