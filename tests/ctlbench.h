@@ -19,6 +19,7 @@
 struct ctlbench {
     struct wsg_reactor reactor;
     struct wsg_sched sched;
+    struct wsg_runner runner; /* a preempted script's turns: never run */
     struct wsg_gripper *grippers;
     size_t ngrippers;
     struct wsg_ctl *ctl;
@@ -48,9 +49,12 @@ static inline int ctlbench_open(struct ctlbench *b, size_t n)
 
     memset(b, 0, sizeof *b);
     b->sched.timer.fd = -1;
+    b->runner.watch.fd = -1;
     if (wsg_reactor_init(&b->reactor) < 0)
         return -1;
     if (wsg_sched_init(&b->sched, &b->reactor, 1000) < 0)
+        return -1;
+    if (wsg_runner_init(&b->runner, &b->reactor, &b->sched) < 0)
         return -1;
     b->grippers = calloc(n, sizeof *b->grippers);
     if (!b->grippers || wsg_axis_config_init(&cfg, "wsg50") < 0)
@@ -58,6 +62,7 @@ static inline int ctlbench_open(struct ctlbench *b, size_t n)
     b->ngrippers = n;
     for (i = 0; i < n; i++) {
         b->grippers[i].index = (unsigned)i;
+        b->grippers[i].runner = &b->runner;
         wsg_device_init(&b->grippers[i].dev, &cfg);
     }
     if (wsg_sched_set_grippers(&b->sched, b->grippers, n) < 0 ||
@@ -69,8 +74,14 @@ static inline int ctlbench_open(struct ctlbench *b, size_t n)
 
 static inline void ctlbench_close(struct ctlbench *b)
 {
+    size_t i;
+
     wsg_control_close(b->ctl);
     b->ctl = NULL;
+    /* A script host made by `script` commands goes with its gripper. */
+    for (i = 0; b->grippers && i < b->ngrippers; i++)
+        wsg_gripper_fini(&b->grippers[i]);
+    wsg_runner_fini(&b->runner);
     wsg_sched_fini(&b->sched);
     wsg_reactor_fini(&b->reactor);
     free(b->grippers);
