@@ -25,6 +25,7 @@
 #include <string.h>
 
 #include "axis_impl.h"
+#include "fuzz_check.h"
 #include "wsg/device.h"
 
 /* Tags are unique per run; a closed session's peer gets a fresh one. */
@@ -34,17 +35,6 @@
 #define FUZZ_END_STEPS 100000L
 /* Floating-point slack for limits the model clamps to. */
 #define FUZZ_EPS 1e-6
-
-/* abort() rather than assert(): the check must stay in every build type;
- * the message names the invariant, libFuzzer's stack trace the path. */
-#define FUZZ_CHECK(cond)                                                      \
-    do {                                                                      \
-        if (!(cond)) {                                                        \
-            fprintf(stderr, "%s:%d: invariant failed: %s\n", __FILE__,        \
-                    __LINE__, #cond);                                         \
-            abort();                                                          \
-        }                                                                     \
-    } while (0)
 
 enum fuzz_phase {
     FUZZ_PH_IDLE,  /* nothing may be sent */

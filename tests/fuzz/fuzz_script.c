@@ -49,6 +49,7 @@
 #include <lauxlib.h>
 #include <lua.h>
 
+#include "fuzz_check.h"
 #include "fuzz_ids.h"
 #include "script_impl.h"
 #include "wsg/device.h"
@@ -57,16 +58,6 @@
 #ifndef FUZZ_ENTRY
 #define FUZZ_ENTRY LLVMFuzzerTestOneInput
 #endif
-
-/* abort() rather than assert(): the check stays in every build type. */
-#define FZ_CHECK(cond)                                                        \
-    do {                                                                      \
-        if (!(cond)) {                                                        \
-            fprintf(stderr, "%s:%d: invariant failed: %s\n", __FILE__,        \
-                    __LINE__, #cond);                                         \
-            abort();                                                          \
-        }                                                                     \
-    } while (0)
 
 /* The input, read to its end and then as zeros: every value is built. */
 struct rd {
@@ -82,12 +73,15 @@ static unsigned rd_byte(struct rd *r)
     return *r->p++;
 }
 
-static void rd_bytes(struct rd *r, uint8_t *out, size_t n)
+/* Eight bytes, little-endian: the bits of a lua_Integer or a double. */
+static uint64_t rd_u64(struct rd *r)
 {
-    size_t i;
+    uint64_t u = 0;
+    int j;
 
-    for (i = 0; i < n; i++)
-        out[i] = (uint8_t)rd_byte(r);
+    for (j = 0; j < 64; j += 8)
+        u |= (uint64_t)rd_byte(r) << j;
+    return u;
 }
 
 /* ==== (a) cmd.send's flattening ==== */
@@ -247,7 +241,6 @@ static int fa_value(struct rd *r, int depth)
     static const double frac[4] = {0.0, 0.5, 0.25, 1e-9};
     lua_State *L = A.L;
     unsigned b = rd_byte(r), arg = b >> 4;
-    uint8_t raw[8];
     lua_Integer iv;
     double dv;
     size_t len;
@@ -272,12 +265,8 @@ static int fa_value(struct rd *r, int depth)
         } else if ((b & 15u) == 3) {
             iv = edge[arg];
         } else {
-            uint64_t u = 0;
-            int j;
+            uint64_t u = rd_u64(r);
 
-            rd_bytes(r, raw, 8);
-            for (j = 7; j >= 0; j--)
-                u = u << 8 | raw[j];
             memcpy(&iv, &u, sizeof iv);
         }
         if ((k = fa_new(FA_INT)) < 0)
@@ -306,12 +295,8 @@ static int fa_value(struct rd *r, int depth)
             if (arg & 8u)
                 dv *= 256.0;
         } else {
-            uint64_t u = 0;
-            int j;
+            uint64_t u = rd_u64(r);
 
-            rd_bytes(r, raw, 8);
-            for (j = 7; j >= 0; j--)
-                u = u << 8 | raw[j];
             memcpy(&dv, &u, sizeof dv);
         }
         if ((k = fa_new(FA_FLOAT)) < 0)
@@ -440,10 +425,10 @@ static int fa_ref(int k, int depth, uint8_t *out, size_t cap, size_t *len)
             return -1;
         border = fa_rawlen(n->table);
         /* A border of the model: t[border] set (or 0), t[border+1] not. */
-        FZ_CHECK(border <= (size_t)n->nkids);
-        FZ_CHECK(border == 0 || A.kids[n->kid0 + (int)border - 1] != 0);
-        FZ_CHECK(border == (size_t)n->nkids ||
-                 A.kids[n->kid0 + (int)border] == 0);
+        FUZZ_CHECK(border <= (size_t)n->nkids);
+        FUZZ_CHECK(border == 0 || A.kids[n->kid0 + (int)border - 1] != 0);
+        FUZZ_CHECK(border == (size_t)n->nkids ||
+                   A.kids[n->kid0 + (int)border] == 0);
         for (i = 0; i < (int)border; i++)
             if (fa_ref(A.kids[n->kid0 + i], depth + 1, out, cap, len) < 0)
                 return -1;
@@ -476,7 +461,7 @@ static void fa_run(struct rd *r)
     lua_State *L;
 
     L = luaL_newstate();
-    FZ_CHECK(L != NULL);
+    FUZZ_CHECK(L != NULL);
     lua_atpanic(L, fa_panic);
     A.L = L;
     A.nnode = 1;
@@ -491,13 +476,13 @@ static void fa_run(struct rd *r)
     errlen = errlens[rd_byte(r) % 5u];
     /* first: 1 (every value), up to past the last (nothing to send). */
     first = 1 + rd_byte(r) % (narg + 1);
-    FZ_CHECK(lua_checkstack(L, (int)narg + 8));
+    FUZZ_CHECK(lua_checkstack(L, (int)narg + 8));
     for (i = 0; i < narg; i++)
         args[i] = fa_value(r, 0);
-    FZ_CHECK(lua_gettop(L) == (int)narg);
+    FUZZ_CHECK(lua_gettop(L) == (int)narg);
 
     want = malloc(cap ? cap : 1);
-    FZ_CHECK(want != NULL);
+    FUZZ_CHECK(want != NULL);
     want_n = 0;
     for (i = first - 1; i < narg; i++)
         if (fa_ref(args[i], 0, want, cap, &want_len) < 0) {
@@ -514,34 +499,34 @@ static void fa_run(struct rd *r)
         uint8_t *out = malloc(cap + FA_GUARD);
         char *err = malloc(errlen + FA_GUARD);
 
-        FZ_CHECK(out != NULL && err != NULL);
+        FUZZ_CHECK(out != NULL && err != NULL);
         memset(out, fill, cap + FA_GUARD);
         memset(err, 0x5A, errlen + FA_GUARD);
         n = wsg_script_flatten(L, (int)first, out, cap, err, errlen);
-        FZ_CHECK(lua_gettop(L) == (int)narg);
-        FZ_CHECK(A.meta_calls == 0);
+        FUZZ_CHECK(lua_gettop(L) == (int)narg);
+        FUZZ_CHECK(A.meta_calls == 0);
         if (n != want_n)
             fprintf(stderr,
                     "fuzz_script: flatten gave %ld, the reference %ld "
                     "(cap %lu)\n",
                     n, want_n, (unsigned long)cap);
-        FZ_CHECK(n == want_n);
+        FUZZ_CHECK(n == want_n);
         if (n >= 0) {
-            FZ_CHECK(memcmp(out, want, (size_t)n) == 0);
+            FUZZ_CHECK(memcmp(out, want, (size_t)n) == 0);
             /* Nothing written past what it returned. */
             for (i = (size_t)n; i < cap + FA_GUARD; i++)
-                FZ_CHECK(out[i] == fill);
+                FUZZ_CHECK(out[i] == fill);
         } else {
             for (i = cap; i < cap + FA_GUARD; i++)
-                FZ_CHECK(out[i] == fill);
+                FUZZ_CHECK(out[i] == fill);
             /* A reason, terminated within errlen. */
             if (errlen > 0)
-                FZ_CHECK(memchr(err, '\0', errlen) != NULL);
+                FUZZ_CHECK(memchr(err, '\0', errlen) != NULL);
             if (errlen > 1)
-                FZ_CHECK(err[0] != '\0');
+                FUZZ_CHECK(err[0] != '\0');
         }
         for (i = errlen; i < errlen + FA_GUARD; i++)
-            FZ_CHECK(err[i] == 0x5A);
+            FUZZ_CHECK(err[i] == 0x5A);
         free(out);
         free(err);
     }
@@ -807,96 +792,96 @@ static void fb_check_answer(const struct fb_entry *e, int si, unsigned kind,
     switch (e->id) {
     case 0xB0:
     case 0xBA:
-        FZ_CHECK(kind == 0 && n == e->len);
-        FZ_CHECK(memcmp(p, e->data, n) == 0);
+        FUZZ_CHECK(kind == 0 && n == e->len);
+        FUZZ_CHECK(memcmp(p, e->data, n) == 0);
         break;
     case 0xB1:
-        FZ_CHECK(kind == 1 && n == 4u + e->len);
-        FZ_CHECK(p[0] == (e->len & 0xFF) && p[1] == e->len >> 8);
-        FZ_CHECK(p[2] == b0);
-        FZ_CHECK(memcmp(p + 3, e->data, e->len) == 0);
-        FZ_CHECK(p[3 + e->len] == (b0 > 127));
+        FUZZ_CHECK(kind == 1 && n == 4u + e->len);
+        FUZZ_CHECK(p[0] == (e->len & 0xFF) && p[1] == e->len >> 8);
+        FUZZ_CHECK(p[2] == b0);
+        FUZZ_CHECK(memcmp(p + 3, e->data, e->len) == 0);
+        FUZZ_CHECK(p[3 + e->len] == (b0 > 127));
         break;
     case 0xB2:
-        FZ_CHECK(kind == 2 && n == (e->len / 4u) * 4u);
+        FUZZ_CHECK(kind == 2 && n == (e->len / 4u) * 4u);
         for (i = 0; i < n; i += 4) {
             /* A float32 and back through a double: the same bits, but
              * for a NaN, which may come back quieted. */
             if (isnan(wsg_get_f32(e->data + i)))
-                FZ_CHECK(isnan(wsg_get_f32(p + i)));
+                FUZZ_CHECK(isnan(wsg_get_f32(p + i)));
             else
-                FZ_CHECK(memcmp(p + i, e->data + i, 4) == 0);
+                FUZZ_CHECK(memcmp(p + i, e->data + i, 4) == 0);
         }
         break;
     case 0xB3:
-        FZ_CHECK(kind == 3 && n == 1);
-        FZ_CHECK(p[0] == 12); /* every try failed, and was caught */
-        FZ_CHECK(e->pre == (e->len >= 1 && b0 <= 127));
+        FUZZ_CHECK(kind == 3 && n == 1);
+        FUZZ_CHECK(p[0] == 12); /* every try failed, and was caught */
+        FUZZ_CHECK(e->pre == (e->len >= 1 && b0 <= 127));
         break;
     case 0xB4: {
         uint32_t us;
 
-        FZ_CHECK(kind == 4 && n == 4);
+        FUZZ_CHECK(kind == 4 && n == 4);
         us = wsg_get_u32(p);
         /* It slept at least what it asked for, and no longer than since
          * the packet came. */
-        FZ_CHECK(us >= b0 * 250u);
-        FZ_CHECK(us <= fb_now() - e->t_us + 1);
+        FUZZ_CHECK(us >= b0 * 250u);
+        FUZZ_CHECK(us <= fb_now() - e->t_us + 1);
         break;
     }
     case 0xB5:
-        FZ_CHECK(kind == 5 && n == 2);
-        FZ_CHECK(wsg_get_u16(p) == fb_busy(b0));
+        FUZZ_CHECK(kind == 5 && n == 2);
+        FUZZ_CHECK(wsg_get_u16(p) == fb_busy(b0));
         break;
     case 0xB6:
-        FZ_CHECK(kind == 6 && n == 6);
-        FZ_CHECK(p[0] <= 1 && p[5] <= 1);
+        FUZZ_CHECK(kind == 6 && n == 6);
+        FUZZ_CHECK(p[0] <= 1 && p[5] <= 1);
         if (p[0])
-            FZ_CHECK(wsg_get_u32(p + 1) == b0 * 16384u);
+            FUZZ_CHECK(wsg_get_u32(p + 1) == b0 * 16384u);
         else
-            FZ_CHECK(wsg_get_u32(p + 1) == 0);
+            FUZZ_CHECK(wsg_get_u32(p + 1) == 0);
         /* Past the cap, string.rep fails. */
         if (b0 * 16384u >= FB_MEMORY)
-            FZ_CHECK(p[0] == 0);
+            FUZZ_CHECK(p[0] == 0);
         break;
     case 0xB7: {
         uint8_t f[4] = {0, 0, 0, 0};
 
-        FZ_CHECK(kind == 7 && n == 5);
+        FUZZ_CHECK(kind == 7 && n == 5);
         memcpy(f, e->data, e->len < 4 ? e->len : 4);
-        FZ_CHECK(p[0] <= 1 && p[3] <= 1 && p[4] <= 1);
+        FUZZ_CHECK(p[0] <= 1 && p[3] <= 1 && p[4] <= 1);
         if (!p[0])
-            FZ_CHECK(wsg_get_u16(p + 1) == 0xFFFF);
+            FUZZ_CHECK(wsg_get_u16(p + 1) == 0xFFFF);
         if (isnan(wsg_get_f32(f)))
-            FZ_CHECK(p[0] == 0); /* mc.speed(NaN) is an error */
+            FUZZ_CHECK(p[0] == 0); /* mc.speed(NaN) is an error */
         break;
     }
     case 0xB8:
-        FZ_CHECK(kind == 8 && n == 2);
-        FZ_CHECK(p[0] == 1 && p[1] == 0);
-        FZ_CHECK(wsg_device_registered(&B.dev, 0xBA) == (int)(b0 & 1u));
+        FUZZ_CHECK(kind == 8 && n == 2);
+        FUZZ_CHECK(p[0] == 1 && p[1] == 0);
+        FUZZ_CHECK(wsg_device_registered(&B.dev, 0xBA) == (int)(b0 & 1u));
         break;
     case 0xB9:
-        FZ_CHECK(kind == 9 && n == 1);
-        FZ_CHECK(b0 < 0xEB || b0 > 0xEE);
-        FZ_CHECK(p[0] == (e->len & 0xFF));
+        FUZZ_CHECK(kind == 9 && n == 1);
+        FUZZ_CHECK(b0 < 0xEB || b0 > 0xEE);
+        FUZZ_CHECK(p[0] == (e->len & 0xFF));
         break;
     case 0xBB: {
         const char *peer = B.sess[si].s.peer;
 
-        FZ_CHECK(kind == 11 && n == 3);
+        FUZZ_CHECK(kind == 11 && n == 3);
         /* What waits in the host's queue: the packets delivered after this
          * one. */
-        FZ_CHECK(p[0] == B.flen - 1);
-        FZ_CHECK(p[1] == 1);
-        FZ_CHECK(p[2] == (peer[0] == 't' ? 'T' : 'U'));
+        FUZZ_CHECK(p[0] == B.flen - 1);
+        FUZZ_CHECK(p[1] == 1);
+        FUZZ_CHECK(p[2] == (peer[0] == 't' ? 'T' : 'U'));
         break;
     }
     case 0xBD:
-        FZ_CHECK(kind == 13 && n == 1 && p[0] <= 1);
+        FUZZ_CHECK(kind == 13 && n == 1 && p[0] <= 1);
         break;
     default:
-        FZ_CHECK(0);
+        FUZZ_CHECK(0);
     }
 }
 
@@ -906,8 +891,8 @@ static void fb_answer(int si, uint8_t id, const uint8_t *p, size_t n)
     struct fb_entry *e;
     unsigned seq, kind;
 
-    FZ_CHECK(n >= 6);
-    FZ_CHECK(wsg_get_u16(p) == WSG_E_SUCCESS && p[2] == FB_MARK);
+    FUZZ_CHECK(n >= 6);
+    FUZZ_CHECK(wsg_get_u16(p) == WSG_E_SUCCESS && p[2] == FB_MARK);
     seq = wsg_get_u16(p + 3);
     kind = p[5];
     if (B.trace)
@@ -918,17 +903,17 @@ static void fb_answer(int si, uint8_t id, const uint8_t *p, size_t n)
      * closed and no other had sent anything since. Every other packet
      * before it was answered. */
     while (B.flen > 0 && fb_at(0)->seq != seq) {
-        FZ_CHECK(fb_at(0)->orphan);
+        FUZZ_CHECK(fb_at(0)->orphan);
         fb_pop();
     }
-    FZ_CHECK(B.flen > 0);
+    FUZZ_CHECK(B.flen > 0);
     e = fb_at(0);
-    FZ_CHECK(e->id == id);
-    FZ_CHECK(e->orphan || e->sess == si);
+    FUZZ_CHECK(e->id == id);
+    FUZZ_CHECK(e->orphan || e->sess == si);
     if (kind == 0xFF) {
         /* B3h's send from inside its pcall: only a byte that fits. */
-        FZ_CHECK(id == 0xB3 && !e->pre && n == 7);
-        FZ_CHECK(e->len >= 1 && e->data[0] <= 127 && p[6] == e->data[0] * 2);
+        FUZZ_CHECK(id == 0xB3 && !e->pre && n == 7);
+        FUZZ_CHECK(e->len >= 1 && e->data[0] <= 127 && p[6] == e->data[0] * 2);
         e->pre = 1;
         return;
     }
@@ -943,12 +928,12 @@ static void fb_send(struct wsg_session *s, const uint8_t *pkt, size_t len)
     size_t n;
     uint8_t id;
 
-    FZ_CHECK(si >= 0 && si < FB_SESSIONS && !fs->closing);
-    FZ_CHECK(len >= WSG_HEADER_LEN + WSG_CRC_LEN);
-    FZ_CHECK(pkt[0] == 0xAA && pkt[1] == 0xAA && pkt[2] == 0xAA);
-    FZ_CHECK(wsg_crc_update(WSG_CRC_INIT, pkt, len) == 0);
+    FUZZ_CHECK(si >= 0 && si < FB_SESSIONS && !fs->closing);
+    FUZZ_CHECK(len >= WSG_HEADER_LEN + WSG_CRC_LEN);
+    FUZZ_CHECK(pkt[0] == 0xAA && pkt[1] == 0xAA && pkt[2] == 0xAA);
+    FUZZ_CHECK(wsg_crc_update(WSG_CRC_INIT, pkt, len) == 0);
     n = wsg_get_u16(pkt + 4);
-    FZ_CHECK(len == WSG_HEADER_LEN + n + WSG_CRC_LEN);
+    FUZZ_CHECK(len == WSG_HEADER_LEN + n + WSG_CRC_LEN);
     id = pkt[3];
     /* The firmware answers the script's IDs with a status alone; the
      * script always sends more. */
@@ -956,7 +941,7 @@ static void fb_send(struct wsg_session *s, const uint8_t *pkt, size_t len)
         fb_answer(si, id, pkt + WSG_HEADER_LEN, n);
         return;
     }
-    FZ_CHECK(n >= 2);
+    FUZZ_CHECK(n >= 2);
     if (B.trace)
         fprintf(stderr, "t=%llu out s%d %02x status %u len %lu\n",
                 (unsigned long long)fb_now(), si, id,
@@ -964,8 +949,8 @@ static void fb_send(struct wsg_session *s, const uint8_t *pkt, size_t len)
     if (n == 2 && wsg_get_u16(pkt + WSG_HEADER_LEN) == WSG_E_OVERRUN &&
         B.just && B.just->id == id && B.just->sess == si) {
         /* The queue was full: refused at once, never read. */
-        FZ_CHECK(B.flen > 0 && fb_at(B.flen - 1) == B.just);
-        FZ_CHECK(B.h->qlen == WSG_SCRIPT_QUEUE);
+        FUZZ_CHECK(B.flen > 0 && fb_at(B.flen - 1) == B.just);
+        FUZZ_CHECK(B.h->qlen == WSG_SCRIPT_QUEUE);
         B.flen--;
         B.next_seq--;
         B.just = NULL;
@@ -1012,20 +997,20 @@ static void fb_check_ended(void)
         if (e->id == 0xB9 && e->len >= 1 && e->data[0] >= 0xEB &&
             e->data[0] <= 0xEE)
             break;
-        FZ_CHECK(e->orphan);
+        FUZZ_CHECK(e->orphan);
     }
     if (i == B.flen)
         fprintf(stderr, "fuzz_script: the script ended unasked: %s\n",
                 st.error ? st.error : "(no error)");
-    FZ_CHECK(i < B.flen);
+    FUZZ_CHECK(i < B.flen);
     if (e->data[0] == 0xED) {
-        FZ_CHECK(!st.failed);
+        FUZZ_CHECK(!st.failed);
     } else {
         if (B.trace)
             fprintf(stderr, "script error: %s\n", st.error);
-        FZ_CHECK(st.failed && st.error);
-        FZ_CHECK(strstr(st.error, e->data[0] == 0xEE ? "requested failure"
-                                                     : "not enough memory"));
+        FUZZ_CHECK(st.failed && st.error);
+        FUZZ_CHECK(strstr(st.error, e->data[0] == 0xEE ? "requested failure"
+                                                       : "not enough memory"));
     }
     if (B.trace)
         fprintf(stderr, "t=%llu script ended%s\n",
@@ -1063,7 +1048,7 @@ static void fb_steps(unsigned n)
 static void fb_event_done(void)
 {
     if (B.fw)
-        FZ_CHECK(B.fw_answers >= 1);
+        FUZZ_CHECK(B.fw_answers >= 1);
     B.fw = 0;
     B.just = NULL;
 }
@@ -1085,8 +1070,8 @@ static void fb_trace_in(void *ctx, const struct wsg_session *s,
         wsg_device_registered(&B.dev, f->id) && !s->announced) {
         /* For the script: it will answer this, or the firmware refuses it
          * with E_OVERRUN at once. */
-        FZ_CHECK(B.running && fb_is_script_id(f->id));
-        FZ_CHECK(B.flen < FB_FIFO);
+        FUZZ_CHECK(B.running && fb_is_script_id(f->id));
+        FUZZ_CHECK(B.flen < FB_FIFO);
         e = fb_at(B.flen++);
         e->seq = B.next_seq++;
         e->id = f->id;
@@ -1131,21 +1116,21 @@ static void fb_start(void)
 
     snprintf(dir, sizeof dir, "%s/fuzz_script_XXXXXX",
              tmp && *tmp ? tmp : "/tmp");
-    FZ_CHECK(mkdtemp(dir) != NULL);
+    FUZZ_CHECK(mkdtemp(dir) != NULL);
     snprintf(path, sizeof path, "%s/fuzz.lua", dir);
     f = fopen(path, "w");
-    FZ_CHECK(f != NULL);
+    FUZZ_CHECK(f != NULL);
     for (k = 0; k < sizeof fb_script / sizeof fb_script[0]; k++) {
         len = strlen(fb_script[k]);
-        FZ_CHECK(fwrite(fb_script[k], 1, len, f) == len);
+        FUZZ_CHECK(fwrite(fb_script[k], 1, len, f) == len);
     }
-    FZ_CHECK(fclose(f) == 0);
+    FUZZ_CHECK(fclose(f) == 0);
     r = wsg_script_start(B.h, path, err, sizeof err);
     unlink(path);
     rmdir(dir);
     if (r != 0)
         fprintf(stderr, "fuzz_script: the script did not start: %s\n", err);
-    FZ_CHECK(r == 0);
+    FUZZ_CHECK(r == 0);
     B.running = 1;
     B.next_seq = 0;
     B.flen = 0;
@@ -1154,7 +1139,7 @@ static void fb_start(void)
 static void fb_stop(void)
 {
     fb_check_ended();
-    FZ_CHECK(wsg_script_stop(B.h) == (B.running ? 0 : -ESRCH));
+    FUZZ_CHECK(wsg_script_stop(B.h) == (B.running ? 0 : -ESRCH));
     B.running = 0;
     B.flen = 0;
     B.woken = 0;
@@ -1169,18 +1154,18 @@ static void fb_check_queue(void)
     const struct wsg_script *h = B.h;
     size_t q = h->qlen, i, handled = 0;
 
-    FZ_CHECK(q <= WSG_SCRIPT_QUEUE && q <= B.flen);
+    FUZZ_CHECK(q <= WSG_SCRIPT_QUEUE && q <= B.flen);
     for (i = 0; i < q; i++) {
         const struct wsg_script_packet *p =
             &h->queue[(h->qhead + i) % WSG_SCRIPT_QUEUE];
         const struct fb_entry *e = fb_at(B.flen - q + i);
 
-        FZ_CHECK(p->id == e->id && p->tag == e->tag && p->len == e->len);
-        FZ_CHECK(memcmp(p->data, e->data, e->len) == 0);
+        FUZZ_CHECK(p->id == e->id && p->tag == e->tag && p->len == e->len);
+        FUZZ_CHECK(memcmp(p->data, e->data, e->len) == 0);
     }
     for (i = 0; i < B.flen - q; i++)
         handled += !fb_at(i)->orphan;
-    FZ_CHECK(handled <= 1);
+    FUZZ_CHECK(handled <= 1);
 }
 
 /* The host, the flags and the registered IDs agree with what the harness
@@ -1194,43 +1179,44 @@ static void fb_check_state(void)
 
     fb_check_ended();
     wsg_script_status(B.h, &st);
-    FZ_CHECK(st.running == B.running);
-    FZ_CHECK(!!(flags & WSG_SF_SCRIPT_RUNNING) == st.running);
-    FZ_CHECK(!!(flags & WSG_SF_SCRIPT_FAILURE) == st.failed);
-    FZ_CHECK(st.memory_max == FB_MEMORY);
+    FUZZ_CHECK(st.running == B.running);
+    FUZZ_CHECK(!!(flags & WSG_SF_SCRIPT_RUNNING) == st.running);
+    FUZZ_CHECK(!!(flags & WSG_SF_SCRIPT_FAILURE) == st.failed);
+    FUZZ_CHECK(st.memory_max == FB_MEMORY);
     n = wsg_script_registered(B.h, ids, sizeof ids);
     if (!st.running) {
-        FZ_CHECK(st.state == WSG_SCRIPT_STOPPED && n == 0 && B.flen == 0);
-        FZ_CHECK(st.memory == 0);
+        FUZZ_CHECK(st.state == WSG_SCRIPT_STOPPED && n == 0 && B.flen == 0);
+        FUZZ_CHECK(st.memory == 0);
         return;
     }
-    FZ_CHECK(st.memory > 0 && st.memory <= st.memory_max);
+    FUZZ_CHECK(st.memory > 0 && st.memory <= st.memory_max);
     for (k = 0; k < sizeof fb_ids; k++)
-        FZ_CHECK(wsg_device_registered(&B.dev, fb_ids[k]));
+        FUZZ_CHECK(wsg_device_registered(&B.dev, fb_ids[k]));
     for (i = 0; i < n; i++)
-        FZ_CHECK(memchr(fb_ids, ids[i], sizeof fb_ids) || ids[i] == 0xBA);
-    FZ_CHECK(n == sizeof fb_ids + (size_t)wsg_device_registered(&B.dev, 0xBA));
+        FUZZ_CHECK(memchr(fb_ids, ids[i], sizeof fb_ids) || ids[i] == 0xBA);
+    FUZZ_CHECK(n ==
+               sizeof fb_ids + (size_t)wsg_device_registered(&B.dev, 0xBA));
     fb_check_queue();
     switch (st.state) {
     case WSG_SCRIPT_READING:
         /* Everything delivered was read and answered, but where the
          * answer went nowhere. */
         for (i = 0; i < B.flen; i++)
-            FZ_CHECK(fb_at(i)->orphan);
-        FZ_CHECK(B.h->qlen == 0);
+            FUZZ_CHECK(fb_at(i)->orphan);
+        FUZZ_CHECK(B.h->qlen == 0);
         B.flen = 0;
-        FZ_CHECK(!B.woken);
+        FUZZ_CHECK(!B.woken);
         break;
     case WSG_SCRIPT_SLEEPING:
-        FZ_CHECK(wsg_script_next(B.h) != UINT64_MAX);
-        FZ_CHECK(wsg_script_next(B.h) >= fb_now());
-        FZ_CHECK(st.wake_us == wsg_script_next(B.h));
+        FUZZ_CHECK(wsg_script_next(B.h) != UINT64_MAX);
+        FUZZ_CHECK(wsg_script_next(B.h) >= fb_now());
+        FUZZ_CHECK(st.wake_us == wsg_script_next(B.h));
         break;
     case WSG_SCRIPT_RUNNABLE:
-        FZ_CHECK(B.woken); /* it asked for its turn */
+        FUZZ_CHECK(B.woken); /* it asked for its turn */
         break;
     default:
-        FZ_CHECK(0); /* RUNNING only inside the host, STOPPED not running */
+        FUZZ_CHECK(0); /* RUNNING only inside the host, STOPPED not running */
     }
 }
 
@@ -1269,7 +1255,7 @@ static void fb_begin(uint8_t cfg)
     int i;
 
     B.trace = getenv("FUZZ_TRACE") != NULL;
-    FZ_CHECK(wsg_axis_config_init(&ac, "wsg50") == 0);
+    FUZZ_CHECK(wsg_axis_config_init(&ac, "wsg50") == 0);
     wsg_device_init(&B.dev, &ac);
     B.dev.lookup = fb_lookup;
     B.dev.trace_in = fb_trace_in;
@@ -1282,7 +1268,7 @@ static void fb_begin(uint8_t cfg)
     B.woken = 0;
     B.slices = 0;
     B.running = 0;
-    FZ_CHECK(wsg_script_new(&B.h, &B.dev, &sc) == 0);
+    FUZZ_CHECK(wsg_script_new(&B.h, &B.dev, &sc) == 0);
     fb_start();
     fb_check_state();
     if (cfg & 2u) {
@@ -1320,12 +1306,12 @@ static void fb_end(void)
     if (B.running && st.state != WSG_SCRIPT_READING)
         fb_stop();
     fb_check_state();
-    FZ_CHECK(B.flen == 0);
+    FUZZ_CHECK(B.flen == 0);
     fb_stop();
     fb_check_state();
     wsg_script_free(B.h);
     B.h = NULL;
-    FZ_CHECK(B.dev.user_cmd == NULL);
+    FUZZ_CHECK(B.dev.user_cmd == NULL);
 }
 
 static void fb_run_input(const uint8_t *data, size_t size)
@@ -1348,7 +1334,7 @@ static void fb_run_input(const uint8_t *data, size_t size)
             len = size - i;
         n = wsg_frame_encode(pkt, sizeof pkt, id, data + i, len);
         i += len;
-        FZ_CHECK(n > 0);
+        FUZZ_CHECK(n > 0);
         /* Control bits 4-7: 0-8 nothing more; 9 the frame as a datagram;
          * 10 its checksum broken; 11 fed in two parts with a step
          * between; 12 the script restarted first; 13 stopped first; 14

@@ -820,6 +820,17 @@ int emu_get_flags(struct emu_client *c, uint32_t *flags)
     return 0;
 }
 
+int emu_get_grasp_state(struct emu_client *c)
+{
+    struct wsg_client_frame f;
+
+    if (emu_request(c, WSG_CMD_GET_GRASP_STATE, NULL, 0, &f, EMU_REPLY_MS) !=
+            WSG_E_SUCCESS ||
+        EMU_NPARAMS(&f) < 1)
+        return -1;
+    return EMU_PARAMS(&f)[0];
+}
+
 int emu_get_float(struct emu_client *c, uint8_t id, float *v)
 {
     struct wsg_client_frame f;

@@ -213,6 +213,8 @@ int emu_sync(struct emu_client *c, int timeout_ms);
 
 /* System state flags (40h); -1 on any failure, else 0. */
 int emu_get_flags(struct emu_client *c, uint32_t *flags);
+/* The grasping state (41h); -1 on any failure. */
+int emu_get_grasp_state(struct emu_client *c);
 /* A float reading (43h, 44h, 45h, 31h, 33h); 0 or -1. */
 int emu_get_float(struct emu_client *c, uint8_t id, float *v);
 /* Poll 40h until (flags & mask) == want. 0, or -1 on timeout; flags (if

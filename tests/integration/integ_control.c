@@ -179,17 +179,6 @@ static uint32_t flags_of(struct emu_client *c)
     return fl;
 }
 
-static int grasp_state_of(struct emu_client *c)
-{
-    struct wsg_client_frame f;
-
-    if (emu_request(c, WSG_CMD_GET_GRASP_STATE, NULL, 0, &f, EMU_REPLY_MS) !=
-            WSG_E_SUCCESS ||
-        EMU_NPARAMS(&f) < 1)
-        return -1;
-    return EMU_PARAMS(&f)[0];
-}
-
 static int home(struct emu_client *c, uint8_t dir)
 {
     int imm;
@@ -342,13 +331,13 @@ static void test_part_lost(struct emu_client *c, struct ctl *k)
     size_t n = emu_grasp_payload(p, 40.0f, 100.0f);
     CHECK_EQ(emu_motion(c, WSG_CMD_GRASP, p, n, EMU_MOVE_MS, &imm),
              WSG_E_SUCCESS);
-    CHECK_EQ(grasp_state_of(c), WSG_GS_HOLDING);
+    CHECK_EQ(emu_get_grasp_state(c), WSG_GS_HOLDING);
 
     CMD_OK(k, "part none");
     int gs = -1;
     double deadline = emu_now_ms() + EMU_REPLY_MS;
     for (;;) {
-        gs = grasp_state_of(c);
+        gs = emu_get_grasp_state(c);
         if (gs == WSG_GS_PART_LOST || emu_now_ms() >= deadline)
             break;
         emu_sleep_ms(10);

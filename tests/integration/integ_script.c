@@ -278,17 +278,6 @@ static double float_of(struct emu_client *c, uint8_t id)
     return v;
 }
 
-static int grasp_state_of(struct emu_client *c)
-{
-    struct wsg_client_frame f;
-
-    if (emu_request(c, WSG_CMD_GET_GRASP_STATE, NULL, 0, &f, EMU_REPLY_MS) !=
-            WSG_E_SUCCESS ||
-        EMU_NPARAMS(&f) < 1)
-        return -1;
-    return EMU_PARAMS(&f)[0];
-}
-
 /* The simulated time us as socket.gettime() gives it. */
 static double seconds(long long us)
 {
@@ -640,7 +629,7 @@ static void api_motion(struct emu_client *c, struct ctl *k)
     readings(c, t, sizeof t);
     CHECK_STR(field(t, R_GRASP_STATE), "1"); /* GRASPING */
     CMD_OK(k, "time step 3000");
-    CHECK_EQ(grasp_state_of(c), WSG_GS_HOLDING);
+    CHECK_EQ(emu_get_grasp_state(c), WSG_GS_HOLDING);
     CHECK_NEAR(float_of(c, WSG_CMD_GET_FORCE_LIMIT), 25.0, 1e-4);
     CHECK_NEAR(float_of(c, WSG_CMD_GET_FORCE), 25.0, 1e-3);
     readings(c, t, sizeof t);
@@ -656,7 +645,7 @@ static void api_motion(struct emu_client *c, struct ctl *k)
     CHECK_STR(field(t, R_GRASP_STATE), "5"); /* RELEASING */
     CMD_OK(k, "time step 3000");
     CHECK_NEAR(float_of(c, WSG_CMD_GET_WIDTH), 60.0, 1e-3);
-    CHECK_EQ(grasp_state_of(c), WSG_GS_IDLE);
+    CHECK_EQ(emu_get_grasp_state(c), WSG_GS_IDLE);
 
     /* grasping.clamp: from just over the part, 5 mm of travel with 35 N;
      * grasping.stop_clamping lets go */
@@ -666,7 +655,7 @@ static void api_motion(struct emu_client *c, struct ctl *k)
     readings(c, t, sizeof t);
     CHECK_STR(field(t, R_GRASP_STATE), "1");
     CMD_OK(k, "time step 3000");
-    CHECK_EQ(grasp_state_of(c), WSG_GS_HOLDING);
+    CHECK_EQ(emu_get_grasp_state(c), WSG_GS_HOLDING);
     CHECK_NEAR(float_of(c, WSG_CMD_GET_FORCE), 35.0, 1e-3);
     CHECK_NEAR(float_of(c, WSG_CMD_GET_FORCE_LIMIT), 35.0, 1e-4);
     {
@@ -679,7 +668,7 @@ static void api_motion(struct emu_client *c, struct ctl *k)
     readings(c, t, sizeof t);
     CHECK_STR(field(t, R_GRASP_STATE), "0");
     CHECK_STR(field(t, R_BUSY), "false");
-    CHECK_EQ(grasp_state_of(c), WSG_GS_IDLE);
+    CHECK_EQ(emu_get_grasp_state(c), WSG_GS_IDLE);
     CMD_OK(k, "part none");
     CMD_OK(k, "time step 1000");
     expect_readings(c, "false");
@@ -1061,7 +1050,7 @@ static void part_speed(const char *exe)
     CMD_OK(&k, "part 40");
     op_status(&c, OP_SPEED, (const float[]){-20}, 1, -1, WSG_E_SUCCESS);
     CHECK(flags_of(&c) & WSG_SF_MOVING);
-    CHECK_EQ(grasp_state_of(&c), WSG_GS_POSITIONING);
+    CHECK_EQ(emu_get_grasp_state(&c), WSG_GS_POSITIONING);
     /* Started, but only the steps move the fingers. */
     readings(&c, t, sizeof t);
     CHECK_STR(field(t, R_BUSY), "true");
@@ -1100,7 +1089,7 @@ static void part_speed(const char *exe)
     CHECK_STR(field(t, R_BLOCKED), "false");
     CHECK_EQ(flags_of(&c) & (WSG_SF_MOVING | WSG_SF_AXIS_STOPPED),
              WSG_SF_AXIS_STOPPED);
-    CHECK_EQ(grasp_state_of(&c), WSG_GS_IDLE);
+    CHECK_EQ(emu_get_grasp_state(&c), WSG_GS_IDLE);
     CMD_OK(&k, "time step 100");
     CHECK_NEAR(float_of(&c, WSG_CMD_GET_FORCE), 0.0, 1e-3);
 
