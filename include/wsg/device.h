@@ -47,6 +47,14 @@ typedef void (*wsg_send_fn)(struct wsg_session *s, const uint8_t *pkt,
 
 /* Session flags. */
 #define WSG_SESSION_CONNECTION 0x01u /* TCP: 07h available, close matters */
+#define WSG_SESSION_TEXT       0x02u /* GCL: it sends and receives lines */
+
+/* A text session's writer (wsg/gcl.h): the device's answers and stream
+ * packets for the session, as the binary protocol has them, to be written
+ * as text (sent with wsg_device_send) instead of sent. */
+typedef void (*wsg_format_fn)(void *ctx, struct wsg_session *s, uint8_t id,
+                              uint16_t status, const uint8_t *params,
+                              size_t len);
 
 struct wsg_session {
     uint32_t tag;  /* unique among live sessions; never 0 */
@@ -54,7 +62,9 @@ struct wsg_session {
     unsigned flags;
     int announced; /* got Disconnect Announcement (07h) */
     wsg_send_fn send;
-    void *ctx; /* the transport's */
+    void *ctx;            /* the transport's */
+    wsg_format_fn format; /* NULL: binary */
+    void *format_ctx;
     unsigned nstreams;
     struct wsg_stream streams[WSG_STREAM_COUNT];
     /* On the device's list of streaming sessions while nstreams > 0, so
@@ -85,6 +95,9 @@ struct wsg_device {
                      const struct wsg_frame *f, enum wsg_parse_event ev);
     void (*trace_out)(void *ctx, const struct wsg_session *s,
                       const uint8_t *pkt, size_t len);
+    /* A text session's line received (without its newline). */
+    void (*trace_line)(void *ctx, const struct wsg_session *s,
+                       const char *line, size_t len);
     void *trace_ctx;
     /* Resolve a session tag for a final result; NULL when it is gone. */
     struct wsg_session *(*lookup)(void *ctx, uint32_t tag);
@@ -136,6 +149,9 @@ void wsg_session_init(struct wsg_session *s, uint32_t tag, unsigned flags,
  * NULL), since a motion s owned ends here. */
 void wsg_device_session_closed(struct wsg_device *d, struct wsg_session *s);
 
+/* A text session's line received, for the communication log. */
+void wsg_device_trace_line(struct wsg_device *d, const struct wsg_session *s,
+                           const char *line, size_t len);
 /* Put one packet on the wire now: the communication log's trace_out, then
  * s->send. What the device sends goes through here, directly or, with an
  * output hook, when the hook releases it. */

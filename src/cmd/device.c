@@ -184,6 +184,13 @@ static void wsg_device_emit(struct wsg_device *d, struct wsg_session *s,
         wsg_device_transmit(d, s, pkt, len);
 }
 
+void wsg_device_trace_line(struct wsg_device *d, const struct wsg_session *s,
+                           const char *line, size_t len)
+{
+    if (d->trace_line)
+        d->trace_line(d->trace_ctx, s, line, len);
+}
+
 void wsg_device_send(struct wsg_device *d, struct wsg_session *s,
                      const uint8_t *pkt, size_t len)
 {
@@ -194,11 +201,15 @@ void wsg_device_reply(struct wsg_device *d, struct wsg_session *s, uint8_t id,
                       uint16_t status, const uint8_t *params, size_t len)
 {
     uint8_t pkt[WSG_FRAME_MAX];
-    size_t n =
-        wsg_frame_encode_reply(pkt, sizeof pkt, id, status, params, len);
+    size_t n;
 
     if (status != WSG_E_CMD_PENDING)
         d->cmd_failure = status != WSG_E_SUCCESS;
+    if (s->format) {
+        s->format(s->format_ctx, s, id, status, params, len);
+        return;
+    }
+    n = wsg_frame_encode_reply(pkt, sizeof pkt, id, status, params, len);
     if (n)
         wsg_device_emit(d, s, pkt, n);
 }
@@ -299,6 +310,11 @@ void wsg_device_poll_streams(struct wsg_device *d, struct wsg_session *s)
         st->due_us += st->period_us;
         if (st->due_us <= now)
             st->due_us = now + st->period_us;
+        if (s->format) {
+            s->format(s->format_ctx, s, wsg_stream_cmd[i], WSG_E_SUCCESS,
+                      params, len);
+            continue;
+        }
         n = wsg_frame_encode_reply(pkt, sizeof pkt, wsg_stream_cmd[i],
                                    WSG_E_SUCCESS, params, len);
         wsg_device_emit(d, s, pkt, n);

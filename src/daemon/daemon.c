@@ -168,7 +168,12 @@ static int open_gripper(struct wsg_daemon *d, struct wsg_gripper *g,
     env.rxlen = WSG_DAEMON_RX_MAX;
     /* In this order on the ready line. */
     if (o.tcp_enabled) {
-        struct wsg_tcp_config c = {o.tcp, o.max_clients, o.check_crc};
+        struct wsg_tcp_config c = {
+            o.tcp,
+            o.max_clients,
+            o.check_crc,
+            o.text_interface,
+            {o.release_pullback, WSG_GCL_DEFAULT_SPEED}};
 
         r = open_transport(g, &wsg_tcp_ops, &env, &c);
         if (r < 0)

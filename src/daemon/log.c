@@ -232,12 +232,42 @@ static void log_in(void *ctx, const struct wsg_session *s,
     emit(tap->log, &l);
 }
 
+/* A text session's line (GCL): "PEER in MOVE(30,100)", "PEER out FIN
+ * MOVE", without its newline. */
+static void log_text(struct wsg_log_tap *tap, const struct wsg_session *s,
+                     const char *dir, const char *text, size_t len)
+{
+    struct line l;
+
+    while (len > 0 && (text[len - 1] == '\n' || text[len - 1] == '\r'))
+        len--;
+    l.n = 0;
+    head_time(tap, &l);
+    put_str(&l, s->peer[0] ? s->peer : "?");
+    put(&l, " ", 1);
+    put_str(&l, dir);
+    put(&l, " ", 1);
+    put(&l, text, len);
+    emit(tap->log, &l);
+}
+
+static void log_line(void *ctx, const struct wsg_session *s, const char *line,
+                     size_t len)
+{
+    log_text(ctx, s, "in", line, len);
+}
+
 static void log_out(void *ctx, const struct wsg_session *s, const uint8_t *pkt,
                     size_t len)
 {
     struct wsg_log_tap *tap = ctx;
     struct line l;
     size_t n;
+
+    if (s->flags & WSG_SESSION_TEXT) {
+        log_text(tap, s, "out", (const char *)pkt, len);
+        return;
+    }
 
     /* The device sends whole packets; the checks keep a malformed one
      * from being read past its end. */
@@ -296,6 +326,7 @@ void wsg_log_attach(struct wsg_log *l, struct wsg_log_tap *tap,
     tap->index = index;
     d->trace_in = log_in;
     d->trace_out = log_out;
+    d->trace_line = log_line;
     d->trace_ctx = tap;
 }
 
@@ -305,6 +336,7 @@ void wsg_log_detach(struct wsg_log_tap *tap, struct wsg_device *d)
         return;
     d->trace_in = NULL;
     d->trace_out = NULL;
+    d->trace_line = NULL;
     d->trace_ctx = NULL;
 }
 

@@ -22,6 +22,8 @@
 
 #define WSG_SCRIPT_MEMORY_MIN_MIB 1u
 #define WSG_SCRIPT_MEMORY_MAX_MIB 1024u
+/* GCL's MOVE, GRIP and RELEASE without a speed, mm/s. */
+#define WSG_GCL_DEFAULT_SPEED     100.0
 #define WSG_STEP_US_MIN           100u
 #define WSG_STEP_US_MAX           100000u
 #define WSG_CAN_ID_DEFAULT        0x000u
@@ -73,6 +75,8 @@ struct wsg_options {
     int check_crc;                       /* 0 with --no-crc */
     int disconnect_fast_stop;            /* 0 with --no-disconnect-fast-stop */
     int force_sensor;                    /* --force-sensor on: tare, D9 */
+    int text_interface;      /* --text-interface on: GCL on the TCP port */
+    double release_pullback; /* mm: GCL's RELEASE() */
     /* --latency MS[:JITTER]: what the gripper sends leaves MS plus up to
      * JITTER ms of simulated time late (0: at once, no delay line). */
     uint32_t latency_ms;

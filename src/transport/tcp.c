@@ -28,6 +28,10 @@
  * then reports it to the device (the FAST STOP rule) and frees it. A client
  * dropped for not reading is reset rather than sent a FIN (peer.c says why).
  *
+ * With --text-interface every connection speaks GCL (wsg/gcl.h) instead:
+ * its bytes go to the interpreter, which answers with lines through the
+ * same session, each line in one send().
+ *
  * Tags: transport base | generation << 8 | slot. The slot makes lookup
  * O(1); the generation, counted per accepted connection, keeps a slot's
  * next occupant from receiving a result meant for its previous one.
@@ -69,6 +73,7 @@ struct wsg_tcp_conn {
      * tells it at once, before the close that follows the batch). */
     int reported;
     struct wsg_parser parser;
+    struct wsg_gcl gcl; /* --text-interface: lines instead of packets */
     struct wsg_session session;
     struct wsg_peer peer; /* last: the set allocates the struct around it */
 };
@@ -80,6 +85,8 @@ struct wsg_tcp {
     struct wsg_device *dev;
     uint32_t tag_base;
     int check_crc;
+    int text;
+    struct wsg_gcl_config gcl;
     /* Held to be given up when accept hits EMFILE, so the pending
      * connection can be taken and closed instead of waking us forever. */
     int spare_fd;
@@ -120,8 +127,11 @@ static void conn_read(struct wsg_tcp_conn *c)
         ssize_t n = recv(c->peer.watch.fd, buf, sizeof buf, MSG_DONTWAIT);
 
         if (n > 0) {
-            wsg_device_input(c->tcp->dev, &c->session, &c->parser, buf,
-                             (size_t)n);
+            if (c->tcp->text)
+                wsg_gcl_input(&c->gcl, buf, (size_t)n);
+            else
+                wsg_device_input(c->tcp->dev, &c->session, &c->parser, buf,
+                                 (size_t)n);
             if ((size_t)n < sizeof buf)
                 return;
             continue;
@@ -234,6 +244,8 @@ static void conn_accept(struct wsg_tcp *tcp, int fd,
                      conn_packet, c);
     /* For the communication log. */
     snprintf(c->session.peer, sizeof c->session.peer, "tcp %s", p->name);
+    if (tcp->text)
+        wsg_gcl_init(&c->gcl, tcp->dev, &c->session, &tcp->gcl);
 }
 
 static void on_listen(struct wsg_tcp *tcp)
@@ -371,6 +383,8 @@ static int tcp_open(struct wsg_transport *t,
     tcp->dev = env->dev;
     tcp->tag_base = t->tag_base;
     tcp->check_crc = cfg->check_crc;
+    tcp->text = cfg->text;
+    tcp->gcl = cfg->gcl;
     if (conns.max == 0 || conns.max > WSG_TCP_CONN_MAX)
         conns.max = WSG_TCP_CONN_MAX;
     wsg_peer_set_init(&tcp->conns, tcp->reactor, &conns);

@@ -24,6 +24,7 @@
 #include "fswatch.h"
 #include "reactor.h"
 #include "wsg/device.h"
+#include "wsg/gcl.h"
 
 #define WSG_TRANSPORT_MAX 8u
 /* tag = (index + 1) << 28 | local: never 0, at most 15 transports. */
@@ -43,6 +44,8 @@ struct wsg_tcp_config {
     struct wsg_endpoint ep;
     unsigned max_clients; /* connections at once; more are refused */
     int check_crc;
+    int text;                  /* GCL instead of the binary protocol */
+    struct wsg_gcl_config gcl; /* with text */
 };
 
 struct wsg_udp_config {
