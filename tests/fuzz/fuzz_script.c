@@ -852,8 +852,11 @@ static void fb_check_answer(const struct fb_entry *e, int si, unsigned kind,
         FUZZ_CHECK(p[0] <= 1 && p[3] <= 1 && p[4] <= 1);
         if (!p[0])
             FUZZ_CHECK(wsg_get_u16(p + 1) == 0xFFFF);
+        /* mc.speed(NaN) is no error but a refusal, as a host gets one for
+         * a NaN in a command (docs/scripting.md): E_INVALID_PARAMETER, or
+         * what refuses any motion first. */
         if (isnan(wsg_get_f32(f)))
-            FUZZ_CHECK(p[0] == 0); /* mc.speed(NaN) is an error */
+            FUZZ_CHECK(p[0] == 1 && wsg_get_u16(p + 1) != WSG_E_SUCCESS);
         break;
     }
     case 0xB8:
