@@ -544,7 +544,7 @@ static void fuzz_directive(const uint8_t *p, size_t n)
     char buf[64], *q, *stop;
     double v[2] = {-1.0, 0.0};
     int nv = 0;
-    unsigned i;
+    unsigned i, bits;
 
     if (n < 2)
         return;
@@ -581,9 +581,11 @@ static void fuzz_directive(const uint8_t *p, size_t n)
                                      : -1.0);
         break;
     case 'f':
-        for (i = 0; i < 5 && nv; i++)
-            if (((unsigned)v[0] >> i) & 1u)
-                wsg_axis_set_fault(ax, faults[i], ((unsigned)v[0] >> 7) & 1u);
+        /* A byte, whatever number the fuzzer wrote. */
+        bits = nv ? (unsigned)fmin(fmax(v[0], 0.0), 255.0) : 0u;
+        for (i = 0; i < 5; i++)
+            if ((bits >> i) & 1u)
+                wsg_axis_set_fault(ax, faults[i], (bits >> 7) & 1u);
         break;
     case 'c':
         G.closing = 1;
