@@ -215,9 +215,18 @@ int xact(struct ctx *x, uint8_t id, const uint8_t *payload, size_t len,
 
 /* Over TCP, announce the close (07h), so the gripper does not go into
  * FAST STOP; the answer is awaited briefly so the 07h is surely read
- * before the FIN. */
+ * before the FIN. Over GCL BYE() does it (text_close), and when nothing
+ * ever came back, both (close_both_ways). */
 void conn_close(struct conn *c)
 {
+    unsigned heard = 0;
+
+    if (c->text)
+        text_close(c);
+    for (int i = 0; i < 256; i++)
+        heard += c->l.seen[i];
+    if (c->kind == LINK_TCP && c->l.fd >= 0 && !c->announced && !heard)
+        close_both_ways(c);
     if (c->kind == LINK_TCP && c->l.fd >= 0 && !c->announced) {
         struct wsg_client_frame r;
         int saved = interrupted;

@@ -7,13 +7,15 @@
  * WSG Commander's command-editor syntax (raw) and decodes hex dumps of
  * packets (decode). It talks TCP, UDP or a serial line; over TCP it always
  * sends Disconnect Announcement (07h) before closing, so using it never puts
- * the gripper into FAST STOP. Through an emulator's control channel it reads
- * without touching the gripper and runs Lua scripts on it (script). Exit
- * statuses are documented in usage().
+ * the gripper into FAST STOP. With --text it speaks GCL, the text interface
+ * of later firmware, instead (text.c), and closes with BYE() for the same
+ * reason. Through an emulator's control channel it reads without touching
+ * the gripper and runs Lua scripts on it (script). Exit statuses are
+ * documented in usage().
  *
  * This file: the options and their arguments, the command table, usage()
  * and main. The link is link.c, the commands commands.c, watch.c,
- * decode.c, control.c and script.c; what they share, wsgctl.h.
+ * decode.c, control.c, script.c and text.c; what they share, wsgctl.h.
  */
 #define _GNU_SOURCE /* getaddrinfo, sigaction, localtime_r */
 
@@ -103,16 +105,6 @@ int split_addr(const char *addr, char *host, size_t cap, unsigned long *port,
     }
     return parse_ulong(rest, 65535, port) < 0 || *port == 0 ? -1 : 0;
 }
-struct command {
-    const char *name;
-    int (*run)(struct ctx *x, int argc, char **argv);
-    int min, max;     /* positional arguments */
-    int conn;         /* needs the link */
-    const char *args; /* for usage */
-    const char *what;
-    const char *example;
-};
-
 static const struct command commands[] = {
     {"home", c_home, 0, 1, 1, "[pos|neg]",
      "Homing (20h); default direction from the gripper's configuration",
@@ -220,7 +212,8 @@ static void usage(FILE *f)
             "usage: wsgctl [--tcp HOST:PORT | --udp HOST:PORT[:LOCAL] | "
             "--serial PATH |\n"
             "               --control HOST:PORT]\n"
-            "              [--timeout S] [-q|--quiet] COMMAND [ARGS]\n"
+            "              [--text] [--timeout S] [-q|--quiet] "
+            "COMMAND [ARGS]\n"
             "\n"
             "Client of a WSG 50 gripper (or wsgemu), command set 2.2.0.\n"
             "\n"
@@ -237,6 +230,12 @@ static void usage(FILE *f)
             "                         (default %u, the gripper's remote "
             "port)\n"
             "  --serial PATH          raw 115200 8N1\n"
+            "  --text                 speak GCL, the text interface of "
+            "later firmware\n"
+            "                         (wsgemu --text-interface on), over "
+            "TCP: the commands\n"
+            "                         listed under \"With --text\"; "
+            "BYE() before the close\n"
             "  --control HOST:PORT    wsgemu's control channel: state, "
             "width, speed,\n"
             "                         force, temperature and stats read "
@@ -249,6 +248,8 @@ static void usage(FILE *f)
             "  --timeout S            wait for an answer (through "
             "E_CMD_PENDING) up to S\n"
             "                         seconds, default 10\n"
+            "  --force N              with --text, grasp's force: "
+            "GRIP(N, ...)\n"
             "  -q, --quiet            bare values for scripts, one answer "
             "a line: \"55.00\"\n"
             "                         instead of \"width 55.00 mm\"; flags "
@@ -263,6 +264,14 @@ static void usage(FILE *f)
                 commands[i].args[0] ? " " : "", commands[i].args);
         print_wrapped(f, commands[i].what);
         fprintf(f, "      e.g. %s\n", commands[i].example);
+    }
+    fprintf(f, "\nWith --text (GCL; readings print as above, an ERR line "
+               "goes to stderr):\n");
+    for (size_t i = 0; i < text_ncommands; i++) {
+        fprintf(f, "  %s%s%s\n", text_commands[i].name,
+                text_commands[i].args[0] ? " " : "", text_commands[i].args);
+        print_wrapped(f, text_commands[i].what);
+        fprintf(f, "      e.g. %s\n", text_commands[i].example);
     }
     fprintf(f, "\nOutput: values with the manual's field names and their "
                "units, one per\n"
@@ -282,12 +291,12 @@ static void usage(FILE *f)
                "Grasp:\n"
                "E_CMD_FAILED\").\n"
                "\nExit status: 0 E_SUCCESS; 1 the gripper answered another "
-               "status (decode:\n"
-               "a bad checksum or incomplete packet; script: the emulator "
-               "refused, its\n"
-               "reason on stderr); 2 usage error; 3 cannot connect, I/O "
-               "error or no\n"
-               "answer within --timeout; 130 interrupted (watch: 0).\n");
+               "status (--text: an\n"
+               "ERR line; decode: a bad checksum or incomplete packet; "
+               "script: the emulator\n"
+               "refused, its reason on stderr); 2 usage error; 3 cannot "
+               "connect, I/O error or\n"
+               "no answer within --timeout; 130 interrupted (watch: 0).\n");
 }
 
 int main(int argc, char **argv)
@@ -332,9 +341,12 @@ int main(int argc, char **argv)
             x.o.stop_on_block = 1;
         } else if (!strcmp(a, "--reset")) {
             x.o.reset = 1;
+        } else if (!strcmp(a, "--text")) {
+            x.o.text = 1;
         } else if (strcmp(a, "--tcp") && strcmp(a, "--udp") &&
                    strcmp(a, "--serial") && strcmp(a, "--control") &&
-                   strcmp(a, "--timeout") && strcmp(a, "--count")) {
+                   strcmp(a, "--timeout") && strcmp(a, "--count") &&
+                   strcmp(a, "--force")) {
             err("unknown option %s (see --help)", a);
             return EXIT_USAGE;
         } else if (!val) {
@@ -363,6 +375,14 @@ int main(int argc, char **argv)
             }
             x.o.count = (long)n;
             i++;
+        } else if (!strcmp(a, "--force")) {
+            if (parse_double(val, &d) < 0 || d < 0) {
+                err("--force: newtons, not \"%s\"", val);
+                return EXIT_USAGE;
+            }
+            x.o.force = d;
+            x.o.has_force = 1;
+            i++;
         } else {
             err("unknown option %s (see --help)", a);
             return EXIT_USAGE;
@@ -372,11 +392,43 @@ int main(int argc, char **argv)
         usage(stderr);
         return EXIT_USAGE;
     }
-    for (size_t i = 0; i < NCOMMANDS; i++)
-        if (!strcmp(pos[0], commands[i].name))
-            cmd = &commands[i];
+    /* raw-text is GCL's alone: it implies --text. */
+    if (!strcmp(pos[0], "raw-text"))
+        x.o.text = 1;
+    if (x.o.text) {
+        for (size_t i = 0; i < text_ncommands; i++)
+            if (!strcmp(pos[0], text_commands[i].name))
+                cmd = &text_commands[i];
+    } else {
+        for (size_t i = 0; i < NCOMMANDS; i++)
+            if (!strcmp(pos[0], commands[i].name))
+                cmd = &commands[i];
+    }
+    if (!cmd && x.o.text) {
+        for (size_t i = 0; i < NCOMMANDS; i++)
+            if (!strcmp(pos[0], commands[i].name))
+                cmd = &commands[i];
+        if (cmd) {
+            err("%s has no GCL form (without --text it speaks the binary "
+                "protocol)",
+                pos[0]);
+            return EXIT_USAGE;
+        }
+    }
     if (!cmd) {
         err("unknown command \"%s\" (see --help)", pos[0]);
+        return EXIT_USAGE;
+    }
+    if (x.o.text && x.o.kind != LINK_TCP) {
+        err("--text (and raw-text) speak GCL, which only TCP carries");
+        return EXIT_USAGE;
+    }
+    if (x.o.text && (x.o.relative || x.o.stop_on_block || x.o.reset)) {
+        err("--relative, --stop-on-block and --reset have no GCL form");
+        return EXIT_USAGE;
+    }
+    if (x.o.has_force && (!x.o.text || strcmp(cmd->name, "grasp"))) {
+        err("--force is for grasp with --text (GRIP's force)");
         return EXIT_USAGE;
     }
     if (npos - 1 < cmd->min || npos - 1 > cmd->max) {
@@ -409,6 +461,7 @@ int main(int argc, char **argv)
     x.command = cmd->name;
     if (cmd->conn) {
         rc = conn_open(&x.c, &x.o);
+        x.c.text = x.o.text;
         if (rc < 0) {
             conn_close(&x.c);
             return -rc;

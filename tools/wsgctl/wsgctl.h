@@ -44,13 +44,18 @@ struct opts {
     int stop_on_block;
     int reset;
     long count; /* watch: stop after this many values; 0: until SIGINT */
+    int text;   /* --text: GCL lines instead of binary packets (text.c) */
+    int has_force;
+    double force; /* --force N: GCL's GRIP(force, ...) */
 };
 
 /* The link to the gripper, and whether its close was announced. */
 struct conn {
     enum link_kind kind;
     struct wsg_client l;
-    int announced; /* TCP: 07h sent, no second one */
+    int announced; /* TCP: 07h (GCL: BYE()) sent, no second one */
+    int text;      /* GCL: closed with BYE() (text_close) */
+    int heard;     /* GCL: a line came back */
 };
 
 struct ctx {
@@ -58,6 +63,18 @@ struct ctx {
     struct conn c;
     int have_conn;
     const char *command; /* wsgctl's name of the command running */
+};
+
+/* A command of wsgctl: its runner, how many positional arguments, whether
+ * it needs the link, and its usage lines. */
+struct command {
+    const char *name;
+    int (*run)(struct ctx *x, int argc, char **argv);
+    int min, max;     /* positional arguments */
+    int conn;         /* needs the link */
+    const char *args; /* for usage */
+    const char *what;
+    const char *example;
 };
 
 typedef void (*pending_fn)(const struct opts *o,
@@ -126,6 +143,14 @@ int c_decode(struct ctx *x, int argc, char **argv);
 
 int control_read(struct ctx *x, uint8_t id, const uint8_t *payload,
                  size_t len);
+
+/* ---- GCL, the text interface (text.c) ---- */
+
+/* The commands with --text, and raw-text (which implies it). */
+extern const struct command text_commands[];
+extern const size_t text_ncommands;
+void text_close(struct conn *c);
+void close_both_ways(struct conn *c);
 
 /* ---- scripts on the gripper, through the control channel (script.c) ---- */
 
