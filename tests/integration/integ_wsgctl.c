@@ -26,6 +26,16 @@
  *   (escapes undone), stop; a missing file, a second run and a script
  *   that fails are exit 1 with the emulator's reason, script without
  *   --control or with a bad subcommand exit 2;
+ * - --text against a second daemon whose TCP port speaks GCL
+ *   (--text-interface on): home, width, move, state, grasp with and
+ *   without a part and with the force --force gives, release, stats,
+ *   fast-stop refusing a move (ERR on stderr, exit 1) and ack, the
+ *   readings printed as the binary commands print them; raw-text with a
+ *   query, a motion (ACK then FIN) and an unknown command; what GCL has no
+ *   form for refused (exit 2); wsgctl in the wrong language with either
+ *   daemon gets no answer (exit 3) and still leaves it out of FAST STOP;
+ *   the text daemon, too, is not in FAST STOP at the end (every close
+ *   announced with BYE());
  * - at the end the gripper is not in FAST STOP: every wsgctl close over
  *   TCP was announced with 07h.
  *
@@ -524,6 +534,114 @@ static void test_script(struct env *v, struct emu *e)
     rmdir(dir);
 }
 
+/* wsgctl --text: e is a daemon started with --text-interface on. */
+#define TXT(v, tcp, ...)                                                      \
+    ctl((v), "--tcp", (tcp), "--text", __VA_ARGS__, (char *)NULL)
+
+static void test_text(struct env *v, const char *exe)
+{
+    const char *args[] = {"--tcp",     "127.0.0.1:0", "--text-interface", "on",
+                          "--control", "127.0.0.1:0", (char *)NULL};
+    char tcp[160], control[160];
+    struct emu e;
+    struct ctl k;
+    size_t n;
+
+    REQUIRE(emu_start(&e, exe, args) == 0);
+    REQUIRE(emu_field(&e, "tcp", tcp, sizeof tcp) != NULL);
+    REQUIRE(emu_field(&e, "control", control, sizeof control) != NULL);
+    REQUIRE(ctl_open(&k, &e) == 0);
+
+    CHECK_EQ(TXT(v, tcp, "home"), 0);
+    CHECK_EQ(v->out[0], '\0'); /* acting commands print nothing */
+    CHECK_EQ(TXT(v, tcp, "width"), 0);
+    CHECK(!strcmp(v->out, "width 110.00 mm\n"));
+    CHECK_EQ(TXT(v, tcp, "move", "40", "100"), 0);
+    CHECK_EQ(TXT(v, tcp, "-q", "width"), 0);
+    CHECK(!strcmp(v->out, "40.00\n"));
+    CHECK_EQ(TXT(v, tcp, "state"), 0);
+    CHECK(!strcmp(v->out,
+                  "flags 0x00000081 (SF_REFERENCED SF_TARGET_POS_REACHED)\n"
+                  "grasp-state 0 (IDLE)\n"));
+    CHECK_EQ(TXT(v, tcp, "-q", "state"), 0);
+    CHECK(!strcmp(v->out, "0x00000081\n0\n"));
+
+    /* GRIP(force, width, speed) sets the force limit: not guessed. */
+    CHECK_EQ(TXT(v, tcp, "grasp", "30", "50"), 2);
+    CHECK(has(v->err, "--force"));
+    /* No part: through the clamping travel, NO PART. */
+    CHECK_EQ(TXT(v, tcp, "--force", "20", "grasp", "30", "50"), 1);
+    CHECK(has(v->err, "ERR GRIP 18 (E_CMD_FAILED)"));
+    CHECK_EQ(TXT(v, tcp, "-q", "state"), 0);
+    n = strlen(v->out);
+    CHECK(n >= 3 && !strcmp(v->out + n - 3, "\n2\n"));
+    CHECK_EQ(TXT(v, tcp, "release"), 0);
+    /* A part where the grip expects it: held. */
+    CMD_OK(&k, "part 20");
+    CHECK_EQ(TXT(v, tcp, "--force", "20", "grasp", "20", "50"), 0);
+    CHECK_EQ(TXT(v, tcp, "state"), 0);
+    CHECK(has(v->out, "grasp-state 4 (HOLDING)\n"));
+    CHECK_EQ(TXT(v, tcp, "-q", "stats"), 0);
+    CHECK(!strcmp(v->out, "2 1 0\n"));
+    CHECK_EQ(TXT(v, tcp, "release", "10", "50"), 0);
+    CMD_OK(&k, "part none");
+    /* GRIP(): close until contact; with nothing there the fingers meet,
+     * and RELEASE() opens by the default pull-back, 10 mm. */
+    CHECK_EQ(TXT(v, tcp, "grasp"), 0);
+    CHECK_EQ(TXT(v, tcp, "release"), 0);
+    CHECK_EQ(TXT(v, tcp, "width"), 0);
+    CHECK(!strcmp(v->out, "width 10.00 mm\n"));
+
+    /* raw-text: every line of the answer, as it came. */
+    CHECK_EQ(ctl(v, "--tcp", tcp, "raw-text", "POS?", (char *)NULL), 0);
+    CHECK(!strcmp(v->out, "POS=10.0\n"));
+    CHECK_EQ(ctl(v, "--tcp", tcp, "raw-text", "MOVE(30, 100)", (char *)NULL),
+             0);
+    CHECK(!strcmp(v->out, "ACK MOVE\nFIN MOVE\n"));
+    CHECK_EQ(ctl(v, "--tcp", tcp, "raw-text", "FOO()", (char *)NULL), 1);
+    CHECK(!strcmp(v->out, "ERR FOO 14\n"));
+    CHECK(has(v->err, "E_CMD_UNKNOWN"));
+
+    /* FAST STOP refuses a motion until acknowledged. */
+    CHECK_EQ(TXT(v, tcp, "fast-stop"), 0);
+    CHECK_EQ(TXT(v, tcp, "move", "40", "100"), 1);
+    CHECK(has(v->err, "ERR MOVE 16 (E_ACCESS_DENIED)"));
+    CHECK_EQ(TXT(v, tcp, "state"), 0);
+    CHECK(has(v->out, "SF_FAST_STOP"));
+    CHECK_EQ(TXT(v, tcp, "ack"), 0);
+    CHECK_EQ(TXT(v, tcp, "move", "40", "100"), 0);
+
+    CHECK_EQ(TXT(v, tcp, "temperature"), 0);
+    CHECK(!strcmp(v->out, "temperature 25.0 degC\n"));
+    CHECK_EQ(TXT(v, tcp, "-q", "info"), 0);
+    CHECK(!strcmp(v->out, "WSG50 2.2.0 1\n"));
+    CHECK_EQ(TXT(v, tcp, "tag"), 0);
+    CHECK(!strcmp(v->out, "tag none\n"));
+    CHECK_EQ(TXT(v, tcp, "tare"), 1); /* no force measurement fingers */
+    CHECK(has(v->err, "E_NOT_AVAILABLE"));
+
+    /* What GCL has no form for. */
+    CHECK_EQ(TXT(v, tcp, "limits"), 2);
+    CHECK(has(v->err, "no GCL form"));
+    CHECK_EQ(TXT(v, tcp, "move", "--relative", "10", "100"), 2);
+    CHECK_EQ(ctl(v, "--udp", v->udp, "raw-text", "POS?", (char *)NULL), 2);
+    CHECK_EQ(ctl(v, "--tcp", tcp, "raw-text", "", (char *)NULL), 2);
+    CHECK_EQ(ctl(v, "--tcp", tcp, "--force", "20", "width", (char *)NULL), 2);
+
+    /* The wrong language gets no answer either way; the close is then
+     * announced both ways, so neither gripper is left in FAST STOP (the
+     * binary one is checked at the end of the test). */
+    CHECK_EQ(TXT(v, v->tcp, "--timeout", "0.5", "width"), 3);
+    CHECK(has(v->err, "no answer"));
+    CHECK_EQ(ctl(v, "--tcp", tcp, "--timeout", "0.5", "width", (char *)NULL),
+             3);
+
+    CHECK_EQ(ctl(v, "--control", control, "state", (char *)NULL), 0);
+    CHECK(!has(v->out, "SF_FAST_STOP"));
+    ctl_close(&k);
+    CHECK_EQ(emu_stop(&e), 0);
+}
+
 static void check_no_fast_stop(struct emu *e)
 {
     struct emu_client c;
@@ -590,6 +708,7 @@ int main(int argc, char **argv)
     test_udp_pty(&v);
     test_control_read(&v, &e);
     test_script(&v, &e);
+    test_text(&v, exe);
     check_no_fast_stop(&e);
 
     CHECK_EQ(emu_stop(&e), 0);
