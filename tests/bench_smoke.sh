@@ -4,7 +4,9 @@
 #  2. attached (--attach READY --pid PID, --no-fleet) to a wsgemu this
 #     script starts, with every interface, so no row may be n/a either.
 # Both include the script rows (a wsgemu --script of the bench's own each
-# time, with tests/scripts/bench_echo.lua and bench_pd.lua): about 5 s.
+# time, with tests/scripts/bench_echo.lua and bench_pd.lua): about 5 s;
+# and the GCL rows (POS? on a wsgemu --text-interface on of the bench's
+# own against 43h on another): under a second.
 # It checks that each run ends with status 0 and that every row of the
 # table is there with a number in the emulator column (and the reference
 # column where the row has one). No figure is compared with its target:
@@ -75,6 +77,7 @@ check_rows() {
     check "RSS (MiB)" yes
     check "peak RSS, VmHWM (MiB)" yes
     check_script
+    check_gcl
 }
 
 # The script rows: the round trip's reference column is the 43h.
@@ -88,6 +91,12 @@ check_script() {
         check "script PD $r Hz: overruns" no
     done
     check "script PD: top rate sustained (1/s)" no
+}
+
+# The GCL rows: the reference column is the binary 43h.
+check_gcl() {
+    check "GCL POS? round trip median (us)" yes
+    check "GCL POS? round trip p99 (us)" yes
 }
 
 check_fleet() {

@@ -13,7 +13,8 @@
  * while moving (control channel "stats"); a time-scaled grasp cycle;
  * memory; scripts on the gripper (a registered ID's round trip beside
  * 43h's, the daemon's wakes while its script waits, a PD script driven at
- * rising rates); and a fleet of grippers in one process (--grippers).
+ * rising rates); POS? over GCL, the text interface, beside 43h; and a
+ * fleet of grippers in one process (--grippers).
  * Figures with a target get "ok" or "MISSED"; a missed target is not an
  * error: this is a measuring tool. It fails (status 1) only when something
  * could not be measured: a server that does not start, a reply that is
@@ -30,13 +31,14 @@
  * old scale back after). A row whose interface or process was not given
  * is n/a with a note on stderr, and that is no failure. The motion rows
  * home and move the attached gripper. The fleet rows always start their
- * own wsgemu --grippers N, and the script rows their own wsgemu --script.
+ * own wsgemu --grippers N, the script rows their own wsgemu --script, and
+ * the GCL rows their own two wsgemu, one with --text-interface on.
  *
  * This file: the options, finding the programs, choosing the CPUs, --attach,
  * starting the servers, the order of the measurements, and the messages
  * and clock every file uses. The others: servers.c, links.c, table.c, and
  * one file per group of figures (traffic.c, idle.c, motion.c, fleet.c,
- * script.c); wsgbench.h, what they share.
+ * script.c, gcl.c); wsgbench.h, what they share.
  */
 #define _GNU_SOURCE /* sched_setaffinity, pipe2, prctl, strndup */
 
@@ -132,6 +134,7 @@ static void usage(FILE *out)
         "                         (default: the source tree's tests/scripts)\n"
         "  --script-seconds S     each rate of the PD script (default 3)\n"
         "  --no-script            skip the script rows\n"
+        "  --no-gcl               skip the GCL rows\n"
         "  --quick                1000 samples, 0.5 s throughput, 2 s "
         "jitter,\n"
         "                         1 s idle, 1 s moving, 0.5 s per PD rate,\n"
@@ -154,27 +157,33 @@ static void usage(FILE *out)
         "bench_pd.lua, a PD step on mc.speed per B1h as UMI's script,\n"
         "driven at 250, 500, 1000 and 2000 Hz: answers/s, % answered,\n"
         "overruns, and the highest rate with 99% answered at 99% of the\n"
-        "rate and no overrun.\n"
-        "\n"
-        "Both servers run on one CPU and the bench on another when there\n"
-        "are two. Exit status: 0 when every figure was measured; 1 when a\n"
-        "server did not start or an answer was missing or malformed (the\n"
-        "table shows n/a there, stderr says why); 2 on a usage error.\n"
-        "\n"
-        "With --attach the reference is still started here and nothing is\n"
-        "pinned, so both servers are scheduled alike. Its rows use the\n"
-        "addresses of READY: udp= says where its answers go (port R on the\n"
-        "bench's address), so the bench binds R, which must be free. Rows\n"
-        "whose interface is not in READY (tcp=, udp=, pty=; control= for\n"
-        "the moving and x100 rows) and, without --pid, its /proc figures\n"
-        "are n/a with a note on stderr, and that is no failure. For the\n"
-        "x100 rows its time scale is set to 100 (control \"time scale\")\n"
-        "and put back after. The moving and x100 rows home, move and grasp\n"
-        "the attached gripper and leave a 40 mm part in it (control \"part\n"
-        "40\"): attach only to a test gripper. The fleet rows still start\n"
-        "their own wsgemu --grippers N (--emu), and the script rows their\n"
-        "own wsgemu --script, skipped when there is none.\n",
+        "rate and no overrun. GCL: POS? on a wsgemu --text-interface on\n"
+        "against 43h on another wsgemu, both started here, in alternating\n"
+        "rounds (the reference column of these rows is the 43h), median\n"
+        "and p99.\n"
+        "\n",
         out);
+    /* Two pieces: C99 promises string literals of 4095 bytes only. */
+    fputs("Both servers run on one CPU and the bench on another when there\n"
+          "are two. Exit status: 0 when every figure was measured; 1 when a\n"
+          "server did not start or an answer was missing or malformed (the\n"
+          "table shows n/a there, stderr says why); 2 on a usage error.\n"
+          "\n"
+          "With --attach the reference is still started here and nothing is\n"
+          "pinned, so both servers are scheduled alike. Its rows use the\n"
+          "addresses of READY: udp= says where its answers go (port R on the\n"
+          "bench's address), so the bench binds R, which must be free. Rows\n"
+          "whose interface is not in READY (tcp=, udp=, pty=; control= for\n"
+          "the moving and x100 rows) and, without --pid, its /proc figures\n"
+          "are n/a with a note on stderr, and that is no failure. For the\n"
+          "x100 rows its time scale is set to 100 (control \"time scale\")\n"
+          "and put back after. The moving and x100 rows home, move and grasp\n"
+          "the attached gripper and leave a 40 mm part in it (control \"part\n"
+          "40\"): attach only to a test gripper. The fleet rows still start\n"
+          "their own wsgemu --grippers N (--emu), the script rows their\n"
+          "own wsgemu --script and the GCL rows two wsgemu, skipped when\n"
+          "there is none.\n",
+          out);
 }
 
 static int parse_num(const char *s, double min, double max, double *v)
@@ -206,6 +215,7 @@ static int parse_opts(struct opts *o, int argc, char **argv)
         {"scripts", required_argument, NULL, 'S'},
         {"script-seconds", required_argument, NULL, 's'},
         {"no-script", no_argument, NULL, 'N'},
+        {"no-gcl", no_argument, NULL, 'G'},
         {"quick", no_argument, NULL, 'q'},
         {"help", no_argument, NULL, 'h'},
         {NULL, 0, NULL, 0}};
@@ -272,6 +282,9 @@ static int parse_opts(struct opts *o, int argc, char **argv)
         case 'N':
             o->no_script = 1;
             break;
+        case 'G':
+            o->no_gcl = 1;
+            break;
         case 'F':
             o->fleet = 0;
             break;
@@ -332,14 +345,15 @@ static int find_exes(struct bench *b)
                               self) >= (int)sizeof b->ref_exe)
         return -1;
     if (access(b->emu_exe, X_OK) < 0) {
-        /* Attached, only the fleet and script rows start one. */
+        /* Attached, only the fleet, script and GCL rows start one. */
         if (b->attach && !b->o.emu) {
-            if (b->o.fleet > 0 || !b->o.no_script)
-                msg("cannot run %s: %s: fleet and script rows skipped "
+            if (b->o.fleet > 0 || !b->o.no_script || !b->o.no_gcl)
+                msg("cannot run %s: %s: fleet, script and GCL rows skipped "
                     "(give --emu PATH)",
                     b->emu_exe, strerror(errno));
             b->o.fleet = 0;
             b->o.no_script = 1;
+            b->o.no_gcl = 1;
         } else {
             msg("cannot run %s: %s (give --emu PATH)", b->emu_exe,
                 strerror(errno));
@@ -578,6 +592,8 @@ int main(int argc, char **argv)
         if (server_stop(&b.srv[s]) < 0)
             b.failures++;
     if (!b.o.no_script && bench_script(&b) < 0)
+        b.failures++;
+    if (!b.o.no_gcl && bench_gcl(&b) < 0)
         b.failures++;
     if (b.o.fleet > 0 && bench_fleet(&b) < 0)
         b.failures++;

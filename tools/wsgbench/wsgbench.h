@@ -53,6 +53,7 @@ struct opts {
     const char *scripts; /* where bench_echo.lua and bench_pd.lua are */
     double script_s;     /* each rate of the PD script */
     int no_script;
+    int no_gcl;
 };
 
 struct server {
@@ -201,5 +202,9 @@ int bench_fleet(struct bench *b);
 /* ---- scripts on the gripper (script.c) ---- */
 
 int bench_script(struct bench *b);
+
+/* ---- GCL, the text interface (gcl.c) ---- */
+
+int bench_gcl(struct bench *b);
 
 #endif
