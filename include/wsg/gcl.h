@@ -37,7 +37,7 @@ struct wsg_gcl_line {
     uint16_t len;
     uint8_t overlong; /* past WSG_GCL_LINE_MAX: skipping to the newline */
     uint8_t binary;   /* a byte no text line has */
-    char buf[WSG_GCL_LINE_MAX + 1];
+    char buf[WSG_GCL_LINE_MAX + 2]; /* the line, a CR, the NUL */
 };
 
 enum wsg_gcl_event {

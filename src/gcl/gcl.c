@@ -301,6 +301,8 @@ static void run_grip(struct wsg_gcl *g, const struct wsg_gcl_command *k,
         win.travel = 0.0;
         win.tolerance = cfg->stroke;
     }
+    /* As the model takes it: a width beyond the stroke is the stroke. */
+    width = width < 0 ? 0 : width > cfg->stroke ? cfg->stroke : width;
     g->grip_nominal = width;
     g->grip_tolerance =
         win.tolerance >= 0 ? win.tolerance : cfg->width_tolerance;

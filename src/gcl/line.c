@@ -40,7 +40,9 @@ size_t wsg_gcl_line_feed(struct wsg_gcl_line *l, const uint8_t *data,
         if (b != '\n') {
             if (!text_byte(b))
                 l->binary = 1;
-            if (l->len == WSG_GCL_LINE_MAX)
+            /* One byte of room past the limit: the CR of a line of the
+             * limit's length that ends in CR LF. */
+            if (l->len == WSG_GCL_LINE_MAX + 1)
                 l->overlong = 1;
             else if (!l->overlong)
                 l->buf[l->len++] = (char)b;
@@ -49,6 +51,8 @@ size_t wsg_gcl_line_feed(struct wsg_gcl_line *l, const uint8_t *data,
         /* CR LF: the CR is not part of the line. */
         while (l->len > 0 && l->buf[l->len - 1] == '\r')
             l->len--;
+        if (l->len > WSG_GCL_LINE_MAX)
+            l->overlong = 1;
         if (l->overlong)
             *ev = WSG_GCL_TOO_LONG;
         else if (l->binary)
@@ -165,13 +169,19 @@ int wsg_gcl_parse(const char *line, size_t n, struct wsg_gcl_cmd *c)
         }
         break;
     case '[': {
-        char *stop;
-        long i = strtol(p + 1, &stop, 10);
+        /* Digits by hand: strtol would read past n on "FDATA[1". */
+        const char *q = p + 1;
+        int i = 0;
 
-        if (stop == p + 1 || stop >= end || *stop != ']' || i < 0 || i > 255)
+        for (; q < end && *q >= '0' && *q <= '9'; q++) {
+            i = i * 10 + (*q - '0');
+            if (i > 255)
+                return -1;
+        }
+        if (q == p + 1 || q == end || *q != ']')
             return -1;
-        c->index = (int)i;
-        p = skip_blanks(stop + 1, end);
+        c->index = i;
+        p = skip_blanks(q + 1, end);
         if (p == end || *p != '?')
             return -1;
         c->form = WSG_GCL_QUERY;
