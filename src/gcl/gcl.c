@@ -277,10 +277,7 @@ static void run_grip(struct wsg_gcl *g, const struct wsg_gcl_command *k,
     double width;
     uint16_t st;
 
-    if (g->s->announced)
-        st = WSG_E_ACCESS_DENIED;
-    else
-        st = wsg_device_motion_check(g->dev, 1);
+    st = wsg_device_motion_check(g->dev, 1);
     if (st == WSG_E_SUCCESS && wsg_axis_busy(ax))
         st = WSG_E_ALREADY_RUNNING;
     if (st == WSG_E_SUCCESS && wsg_axis_grasp_state(ax) == WSG_GS_HOLDING)
@@ -546,8 +543,17 @@ static void gcl_run(struct wsg_gcl *g, const char *line, size_t n)
 {
     struct wsg_gcl_cmd c;
     size_t i;
+    int bad = wsg_gcl_parse(line, n, &c) < 0;
 
-    if (wsg_gcl_parse(line, n, &c) < 0) {
+    /* After BYE every command is refused, as every packet after 07h is
+     * (3.1.2: the gripper waits for the close), whatever runs it: not
+     * only those that reach the dispatcher, but VERBOSE, PWT, CLT, FDATA,
+     * GRIP and unknown or malformed ones too. */
+    if (g->s->announced) {
+        gcl_err(g, c.name[0] ? c.name : "?", WSG_E_ACCESS_DENIED);
+        return;
+    }
+    if (bad) {
         gcl_err(g, c.name[0] ? c.name : "?", WSG_E_CMD_FORMAT_ERROR);
         return;
     }
