@@ -8,7 +8,8 @@
 # files and any report at all fails this script.
 #
 # Usage: memcheck.sh WSGEMU INTEG_DIR [TEST[:TRANSPORT]...]
-#   (integ_script takes its part where the others take a transport)
+#   (integ_script and integ_gcl take their part where the others take a
+#   transport)
 #   INTEG_DIR holds the integration test programs; without TESTs, the list
 #   below. Exit status: 0 clean, 1 a test failed or valgrind reported
 #   something, 77 no valgrind here (skipped), 2 usage.
@@ -39,7 +40,9 @@ if [ $# = 0 ]; then
         integ_latency integ_together integ_wsgctl integ_fleet \
         integ_script:api integ_script:ifaces integ_script:speed \
         integ_script:lifecycle integ_script:sandbox integ_script:lockstep \
-        integ_script:startup
+        integ_script:startup \
+        integ_gcl:commands integ_gcl:framing integ_gcl:rules \
+        integ_gcl:fleet integ_gcl:log
 fi
 
 if ! command -v valgrind >/dev/null 2>&1; then
