@@ -552,6 +552,9 @@ static void test_queries(struct gcl *c, struct ctl *k)
     unsigned long flags, total;
     unsigned no_part, lost;
 
+    /* Time stands while state and replies are compared: the drive's
+     * temperature follows its work. */
+    CMD_OK(k, "time pause");
     js = ctl_state(k);
     temp = ctl_json_num(js, "temperature");
     flags = (unsigned long)ctl_json_num(js, "flags");
@@ -575,6 +578,7 @@ static void test_queries(struct gcl *c, struct ctl *k)
     ASK(c, "TAG?", "TAG=cell-4");
     ASK(c, "TEMP[0]?", "ERR TEMP 15");
     ASK(c, "SN=5", "ERR SN 15");
+    CMD_OK(k, "time resume");
 }
 
 /* With --force-sensor on: TARE out of force control, FDATA the force. */
