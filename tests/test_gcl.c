@@ -146,10 +146,28 @@ static void test_grip_beyond_stroke(void)
     CHECK(strcmp(out.text, "ACK GRIP\nERR GRIP 29\n") == 0);
 }
 
+/* After BYE() every line is refused, the interpreter's own too, as the
+ * binary side refuses everything after 07h. */
+static void test_after_bye(void)
+{
+    static const struct wsg_gcl_config cfg = {10.0, 100.0};
+    struct tdev t;
+    struct wsg_gcl g;
+
+    tdev_init(&t);
+    t.sess[0].s.send = out_send;
+    wsg_gcl_init(&g, &t.dev, &t.sess[0].s, &cfg);
+    memset(&out, 0, sizeof out);
+    say(&g, "BYE()\nVERBOSE=1\nPWT=5\nPOS?\nFOO()\n");
+    CHECK(strcmp(out.text, "ACK BYE\nERR VERBOSE 16\nERR PWT 16\n"
+                           "ERR POS 16\nERR FOO 16\n") == 0);
+}
+
 int main(void)
 {
     test_line_limits();
     test_parse();
     test_grip_beyond_stroke();
+    test_after_bye();
     TEST_EXIT();
 }
