@@ -108,6 +108,16 @@ static void say(struct wsg_gcl *g, const char *line)
     wsg_gcl_input(g, (const uint8_t *)line, strlen(line));
 }
 
+/* A device whose session 0 speaks GCL into out. */
+static void gcl_open(struct tdev *t, struct wsg_gcl *g)
+{
+    static const struct wsg_gcl_config cfg = {10.0, 100.0};
+
+    tdev_init(t);
+    t->sess[0].s.send = out_send;
+    wsg_gcl_init(g, &t->dev, &t->sess[0].s, &cfg);
+}
+
 static void run_until_quiet(struct tdev *t)
 {
     int i;
@@ -118,13 +128,10 @@ static void run_until_quiet(struct tdev *t)
 
 static void test_grip_beyond_stroke(void)
 {
-    static const struct wsg_gcl_config cfg = {10.0, 100.0};
     struct tdev t;
     struct wsg_gcl g;
 
-    tdev_init(&t);
-    t.sess[0].s.send = out_send;
-    wsg_gcl_init(&g, &t.dev, &t.sess[0].s, &cfg);
+    gcl_open(&t, &g);
     say(&g, "HOME()\n");
     run_until_quiet(&t);
     memset(&out, 0, sizeof out);
@@ -150,13 +157,10 @@ static void test_grip_beyond_stroke(void)
  * binary side refuses everything after 07h. */
 static void test_after_bye(void)
 {
-    static const struct wsg_gcl_config cfg = {10.0, 100.0};
     struct tdev t;
     struct wsg_gcl g;
 
-    tdev_init(&t);
-    t.sess[0].s.send = out_send;
-    wsg_gcl_init(&g, &t.dev, &t.sess[0].s, &cfg);
+    gcl_open(&t, &g);
     memset(&out, 0, sizeof out);
     say(&g, "BYE()\nVERBOSE=1\nPWT=5\nPOS?\nFOO()\n");
     CHECK(strcmp(out.text, "ACK BYE\nERR VERBOSE 16\nERR PWT 16\n"

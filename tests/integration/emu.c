@@ -820,6 +820,19 @@ int emu_get_flags(struct emu_client *c, uint32_t *flags)
     return 0;
 }
 
+long emu_slurp(const char *path, char *buf, size_t cap)
+{
+    FILE *f = fopen(path, "r");
+    size_t n;
+
+    if (!f)
+        return -1;
+    n = fread(buf, 1, cap - 1, f);
+    buf[n] = '\0';
+    fclose(f);
+    return (long)n;
+}
+
 int emu_get_grasp_state(struct emu_client *c)
 {
     struct wsg_client_frame f;

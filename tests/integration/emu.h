@@ -209,6 +209,10 @@ int emu_request(struct emu_client *c, uint8_t id, const void *payload,
  * Loop has then been parsed (and counted in seen[]). 0 or -1. */
 int emu_sync(struct emu_client *c, int timeout_ms);
 
+/* The whole file at path into buf (NUL-terminated, at most cap - 1
+ * bytes): its length, or -1 when it cannot be opened. */
+long emu_slurp(const char *path, char *buf, size_t cap);
+
 /* ---- gripper helpers (requests with an empty payload) ---- */
 
 /* System state flags (40h); -1 on any failure, else 0. */

@@ -1104,20 +1104,6 @@ static void part_fleet(const char *exe)
 
 /* ---- the communication log ---- */
 
-/* The whole file into buf (NUL-terminated); its length, or -1. */
-static long slurp(const char *path, char *buf, size_t cap)
-{
-    FILE *f = fopen(path, "r");
-    size_t n;
-
-    if (!f)
-        return -1;
-    n = fread(buf, 1, cap - 1, f);
-    buf[n] = '\0';
-    fclose(f);
-    return (long)n;
-}
-
 static void part_log(const char *exe)
 {
     static const char *const sent[] = {"ACK HOME", "FIN HOME", "ACK MOVE",
@@ -1150,7 +1136,7 @@ static void part_log(const char *exe)
     EXPECT(&c, "ERR ? 15");
     gcl_bye(&c);
     CHECK_EQ(emu_stop(&e), 0);
-    REQUIRE(slurp(path, text, sizeof text) > 0);
+    REQUIRE(emu_slurp(path, text, sizeof text) > 0);
     printf("log:\n%s", text);
 
     /* The lines in, as sent; the unreadable ones by what they were. */

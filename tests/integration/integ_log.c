@@ -24,20 +24,6 @@
 
 static const char *exe;
 
-/* The whole file into buf (NUL-terminated); its length, or -1. */
-static long slurp(const char *path, char *buf, size_t cap)
-{
-    FILE *f = fopen(path, "r");
-    size_t n;
-
-    if (!f)
-        return -1;
-    n = fread(buf, 1, cap - 1, f);
-    buf[n] = '\0';
-    fclose(f);
-    return (long)n;
-}
-
 /* The first line that contains every one of the (NULL-terminated) parts;
  * NULL if none does. The line is copied into out. */
 static const char *find_line(const char *text, const char *const *parts,
@@ -128,7 +114,7 @@ static void test_log(const char *dir)
         double deadline = emu_now_ms() + EMU_REPLY_MS;
 
         for (;;) {
-            REQUIRE(slurp(path, text, sizeof text) >= 0);
+            REQUIRE(emu_slurp(path, text, sizeof text) >= 0);
             if (find_line(text, p, line, sizeof line) ||
                 emu_now_ms() >= deadline)
                 break;
@@ -138,7 +124,7 @@ static void test_log(const char *dir)
     }
     emu_close(&c);
     CHECK_EQ(emu_stop(&e), 0);
-    REQUIRE(slurp(path, text, sizeof text) > 0);
+    REQUIRE(emu_slurp(path, text, sizeof text) > 0);
     printf("log:\n%s", text);
 
     /* The peer as the transport names it: "tcp 127.0.0.1:PORT". */
