@@ -48,6 +48,7 @@ size_t wsg_state_format(char *buf, size_t cap, const struct wsg_gripper *g,
     unsigned gs = (unsigned)wsg_axis_grasp_state(ax);
     struct wsg_grasp_stats stats = wsg_axis_stats(ax);
     char t[32], key[32], gs_key[32];
+    double part_width, stiffness;
     size_t used = 0;
     unsigned i;
     int first = 1;
@@ -83,9 +84,16 @@ size_t wsg_state_format(char *buf, size_t cap, const struct wsg_gripper *g,
     }
     append(
         buf, cap, &used,
-        "\"paused\":%s,\"scale\":%g,\"delayed\":%lu,\"delay_dropped\":%llu}",
+        "\"paused\":%s,\"scale\":%g,\"delayed\":%lu,\"delay_dropped\":%llu,",
         s->paused ? "true" : "false", s->scale,
         (unsigned long)wsg_gripper_delayed(g),
         (unsigned long long)wsg_gripper_delay_dropped(g));
+    /* The world's part too: the web page draws it between the fingers. */
+    if (wsg_axis_part(ax, &part_width, &stiffness))
+        append(buf, cap, &used,
+               "\"part\":{\"width\":%.3f,\"stiffness\":%g}}", part_width,
+               stiffness);
+    else
+        append(buf, cap, &used, "\"part\":null}");
     return used;
 }

@@ -31,8 +31,9 @@ void wsg_state_format_time(char *buf, size_t len, uint64_t us);
 /* g's state into buf (NUL-terminated, cut to fit cap, which
  * WSG_STATE_JSON_MAX always does): width, speed, force, temperature,
  * flags and their names, grasp state and its name, statistics, simulated
- * time, whether time is paused and its scale, the delay line's figures.
- * Returns the length. */
+ * time, whether time is paused and its scale, the delay line's figures,
+ * the part placed between the fingers (null: none). Returns the
+ * length. */
 size_t wsg_state_format(char *buf, size_t cap, const struct wsg_gripper *g,
                         const struct wsg_sched *s, enum wsg_state_parts parts);
 
