@@ -712,7 +712,9 @@ void wsg_web_close(struct wsg_web *web)
                 sub->gone = 1;
                 sub_resume(sub);
             }
+            web->in_run = 1; /* no kick: this loop is the next run */
             MHD_run(web->mhd);
+            web->in_run = 0;
         }
         MHD_stop_daemon(web->mhd);
     }
