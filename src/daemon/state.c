@@ -90,9 +90,8 @@ size_t wsg_state_format(char *buf, size_t cap, const struct wsg_gripper *g,
         (unsigned long long)wsg_gripper_delay_dropped(g));
     /* The world's part too: the web page draws it between the fingers. */
     if (wsg_axis_part(ax, &part_width, &stiffness))
-        append(buf, cap, &used,
-               "\"part\":{\"width\":%.3f,\"stiffness\":%g}}", part_width,
-               stiffness);
+        append(buf, cap, &used, "\"part\":{\"width\":%.3f,\"stiffness\":%g}}",
+               part_width, stiffness);
     else
         append(buf, cap, &used, "\"part\":null}");
     return used;

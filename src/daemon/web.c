@@ -14,11 +14,12 @@
  * it out), and a new state resumes it. A resumed connection is taken up
  * only by MHD_run, and in this mode nothing of MHD's makes its epoll
  * descriptor readable for it (it has no inter-thread channel without a
- * thread), so a resume is a kick: MHD runs again right after, at once
- * when outside MHD_run, else after it returns. A suspended connection's
- * hang-up is not seen by MHD, so
- * its socket is watched here meanwhile (EPOLLRDHUP), and a client that
- * closed the page does not keep its slot until the next change.
+ * thread), so a resume is a kick: MHD runs again at once, through the
+ * timer when the push comes from the hook after a batch, once more
+ * before MHD_run's caller returns when it comes from a handler. A
+ * suspended connection's hang-up is not seen by MHD, so its socket is
+ * watched here meanwhile (EPOLLRDHUP), and a client that closed the page
+ * does not keep its slot until the next change.
  *
  * When is there a new state? After each batch of events (a reactor hook)
  * the first gripper's state is formatted without its time and compared
