@@ -7,6 +7,10 @@ set -eu
 pkgs="cmake make gcc libc6-dev"
 # Scripts on the gripper run on Debian's Lua 5.4, found with pkg-config.
 pkgs="$pkgs pkgconf liblua5.4-dev"
+# The web page (--web) is served by GNU libmicrohttpd, found with
+# pkg-config; its -dev package brings GnuTLS's headers, which the static
+# build's stand-in for GnuTLS is checked against (src/static/gnutls_none.c).
+pkgs="$pkgs libmicrohttpd-dev"
 # The memcheck test (tests/memcheck.sh) runs the daemon under valgrind.
 pkgs="$pkgs valgrind"
 # The .deb and its test (tests/package/run.sh): CPack's Depends come from

@@ -36,6 +36,7 @@
 
 #include "gripper.h"
 #include "peer.h"
+#include "state.h"
 
 #define WSG_CTL_READ_CHUNK 1024u
 #define WSG_CTL_REPLY_MAX  2048u
@@ -102,20 +103,6 @@ static int parse_num(const char *s, double *v)
     errno = 0;
     *v = strtod(s, &end);
     return end != s && *end == '\0' && errno == 0 && isfinite(*v);
-}
-
-/* Seconds of simulated time: microseconds exactly, trailing zeros dropped
- * down to milliseconds ("12.345", "0.900", "1.2345"). */
-static void format_time(char *buf, size_t len, uint64_t us)
-{
-    char frac[8];
-    int digits = 6;
-
-    snprintf(frac, sizeof frac, "%06u", (unsigned)(us % 1000000u));
-    while (digits > 3 && frac[digits - 1] == '0')
-        digits--;
-    frac[digits] = '\0';
-    snprintf(buf, len, "%llu.%s", (unsigned long long)(us / 1000000u), frac);
 }
 
 /* ---- commands ---- */
@@ -223,8 +210,8 @@ static void reply_time(struct ctl_ctx *c)
 
     /* Steps run by hand may have left the gripper idle part way. */
     wsg_sched_touch(c->ctl->sched, c->ctl->cur);
-    format_time(t, sizeof t,
-                wsg_axis_time(wsg_device_axis(&c->ctl->cur->dev)));
+    wsg_state_format_time(t, sizeof t,
+                          wsg_axis_time(wsg_device_axis(&c->ctl->cur->dev)));
     reply(c, "ok %s", t);
 }
 
@@ -323,48 +310,12 @@ static void append(char *buf, size_t cap, size_t *used, const char *fmt, ...)
 
 static void cmd_state(struct ctl_ctx *c, int argc, char **argv)
 {
+    char buf[WSG_STATE_JSON_MAX];
+
     (void)argc;
     (void)argv;
-    const struct wsg_gripper *g = c->ctl->cur;
-    const struct wsg_device *d = &g->dev;
-    const struct wsg_axis *ax = wsg_device_axis_const(d);
-    const struct wsg_sched *l = c->ctl->sched;
-    uint32_t flags = wsg_device_flags(d);
-    unsigned gs = (unsigned)wsg_axis_grasp_state(ax);
-    struct wsg_grasp_stats stats = wsg_axis_stats(ax);
-    char buf[WSG_CTL_REPLY_MAX - 8];
-    char t[32], key[32], gs_key[32];
-    size_t used = 0;
-    unsigned i;
-    int first = 1;
-
-    format_time(t, sizeof t, wsg_axis_time(ax));
-    append(buf, sizeof buf, &used,
-           "{\"width\":%.3f,\"speed\":%.3f,\"force\":%.3f,"
-           "\"temperature\":%.2f,\"flags\":%lu,\"flag_names\":[",
-           wsg_axis_width(ax), wsg_axis_speed(ax), wsg_axis_force(ax),
-           wsg_axis_temperature(ax), (unsigned long)flags);
-    /* The manual's names in the channel's spelling ("fast_stop"). */
-    for (i = 0; i < 32; i++) {
-        if (!(flags & (1u << i)) || !wsg_system_flag_names[i])
-            continue;
-        wsg_schema_key(wsg_system_flag_names[i], key, sizeof key);
-        append(buf, sizeof buf, &used, "%s\"%s\"", first ? "" : ",", key);
-        first = 0;
-    }
-    if (gs < WSG_GS_COUNT)
-        wsg_schema_key(wsg_grasp_state_names[gs], gs_key, sizeof gs_key);
-    else
-        strcpy(gs_key, "unknown");
-    append(buf, sizeof buf, &used,
-           "],\"grasp_state\":%u,\"grasp_state_name\":\"%s\","
-           "\"stats\":{\"total\":%lu,\"no_part\":%u,\"lost_part\":%u},"
-           "\"time\":%s,\"paused\":%s,\"scale\":%g,"
-           "\"delayed\":%lu,\"delay_dropped\":%llu}",
-           gs, gs_key, (unsigned long)stats.total, (unsigned)stats.no_part,
-           (unsigned)stats.lost_part, t, l->paused ? "true" : "false",
-           l->scale, (unsigned long)wsg_gripper_delayed(g),
-           (unsigned long long)wsg_gripper_delay_dropped(g));
+    wsg_state_format(buf, sizeof buf, c->ctl->cur, c->ctl->sched,
+                     WSG_STATE_ALL);
     reply(c, "ok %s", buf);
 }
 

@@ -7,7 +7,7 @@
  * opened in a fixed order, each from its own config struct, with the
  * scheduler as their host. A fleet opens the same interfaces for every
  * gripper, each with its own addresses (wsg_options_gripper), and the
- * control channel once for the process, last.
+ * control channel and the web page once for the process, last.
  */
 #define _GNU_SOURCE /* signalfd */
 
@@ -284,6 +284,7 @@ int wsg_daemon_open(struct wsg_daemon *d)
 
     d->ngrippers = 0;
     d->control = NULL;
+    d->web = NULL;
     d->signal.fd = -1;
     d->sched.timer.fd = -1;
     d->fswatch.watch.fd = -1;
@@ -349,9 +350,20 @@ int wsg_daemon_open(struct wsg_daemon *d)
     if (d->opt.control_enabled) {
         char err[512];
 
-        /* Last: the ready line ends with control=. */
+        /* Last but the web page: the ready line ends with control= and
+         * web=. */
         r = wsg_control_open(&d->control, &d->reactor, &d->sched,
                              &d->opt.control, err, sizeof err);
+        if (r < 0) {
+            fprintf(stderr, "wsgemu: %s\n", err);
+            return r;
+        }
+    }
+    if (d->opt.web_enabled) {
+        char err[512];
+
+        r = wsg_web_open(&d->web, &d->reactor, &d->sched, &d->opt.web, err,
+                         sizeof err);
         if (r < 0) {
             fprintf(stderr, "wsgemu: %s\n", err);
             return r;
@@ -400,7 +412,7 @@ static int put_field(char **buf, size_t *cap, size_t *used, const char *name,
     return r < 0 ? r : put(buf, cap, used, v);
 }
 
-/* "ready tcp=A udp=B ... control=C"; in a fleet each gripper field lists
+/* "ready tcp=A udp=B ... control=C web=D"; in a fleet each gripper field lists
  * every gripper's value, comma-separated, in gripper order. */
 int wsg_daemon_announce(struct wsg_daemon *d)
 {
@@ -423,6 +435,11 @@ int wsg_daemon_announce(struct wsg_daemon *d)
         r = wsg_control_describe(d->control, v, sizeof v);
         if (r == 0)
             r = put_field(&line, &cap, &used, "control", v, 1);
+    }
+    if (r == 0 && d->web) {
+        r = wsg_web_describe(d->web, v, sizeof v);
+        if (r == 0)
+            r = put_field(&line, &cap, &used, "web", v, 1);
     }
     if (r < 0) {
         fprintf(stderr, "wsgemu: ready line: %s\n", strerror(-r));
@@ -459,6 +476,8 @@ static void close_gripper(struct wsg_gripper *g)
 
 void wsg_daemon_close(struct wsg_daemon *d)
 {
+    wsg_web_close(d->web);
+    d->web = NULL;
     wsg_control_close(d->control);
     d->control = NULL;
     while (d->ngrippers > 0)

@@ -2,8 +2,8 @@
  * The daemon's whole context in one struct, built in main: options, the
  * emulated grippers (one, or a fleet with --grippers), the reactor and the
  * services on it (the scheduler, the file watches, the signals, the
- * control channel) and the communication log. Nothing of it is global, so the
- * parts can be driven and torn down in any test harness.
+ * control channel, the web page) and the communication log. Nothing of it is
+ * global, so the parts can be driven and torn down in any test harness.
  */
 #ifndef WSG_DAEMON_H
 #define WSG_DAEMON_H
@@ -21,6 +21,7 @@
 #include "runner.h"
 #include "sched.h"
 #include "transport.h"
+#include "web.h"
 
 /* The shared receive buffer: the largest datagram. */
 #define WSG_DAEMON_RX_MAX 65536u
@@ -36,6 +37,7 @@ struct wsg_daemon {
     struct wsg_watch signal; /* signalfd: SIGINT and SIGTERM end the run */
     uint8_t *rx;             /* one receive buffer for every transport */
     struct wsg_ctl *control; /* NULL: no control channel */
+    struct wsg_web *web;     /* NULL: no web page */
     struct wsg_log log; /* the communication log (--log); closed: f NULL */
 };
 

@@ -217,8 +217,8 @@ static void model_value_set(struct wsg_model_value *m, double v, unsigned line)
 
 /* The parsers of composite values (wsg_setting_parse_fn). */
 
-/* --tcp, --control [ADDR:]PORT: without ADDR, the address before it stays
- * (the default's, or the config file's). */
+/* --tcp, --control, --web [ADDR:]PORT: without ADDR, the address before it
+ * stays (the default's, or the config file's). */
 static int set_endpoint(struct wsg_options *o, const struct wsg_setting *s,
                         const char *val, unsigned line, char *err,
                         size_t errcap)
@@ -436,6 +436,18 @@ static const struct wsg_setting settings[] = {
      .arg = "[ADDR:]PORT",
      .help = "control channel (TCP, default\n"
              "address 127.0.0.1)"},
+    /* Like the control channel, it can stop the gripper and will change
+     * its settings: loopback unless an address is given. */
+    {.name = "web",
+     .type = WSG_SETTING_PARSE,
+     .parse = set_endpoint,
+     .at = WSG_AT(web),
+     .given = WSG_AT(web_enabled),
+     .def = "127.0.0.1:0",
+     .section = WSG_SECTION_INTERFACES,
+     .arg = "[ADDR:]PORT",
+     .help = "the gripper's web page (HTTP,\n"
+             "default address 127.0.0.1)"},
     {.name = "model",
      .type = WSG_SETTING_TEXT,
      .at = WSG_AT(model),
@@ -859,7 +871,7 @@ static void usage(FILE *f)
           "\n"
           "When every interface is open, one line is printed on stdout:\n"
           "  ready tcp=ADDR:PORT udp=ADDR:PORT>REMOTE pty=PATH can=IFACE:ID\n"
-          "        control=ADDR:PORT\n"
+          "        control=ADDR:PORT web=ADDR:PORT\n"
           "(the fields of the open interfaces only; with --grippers N each\n"
           "gripper field lists N values, comma-separated, in gripper order).\n"
           "SIGINT or SIGTERM stops the emulator with exit status 0.\n",

@@ -65,6 +65,8 @@ struct wsg_options {
     uint16_t can_id;             /* commands on can_id, answers on can_id+1 */
     int control_enabled;         /* --control given */
     struct wsg_endpoint control; /* the control channel (loopback default) */
+    int web_enabled;             /* --web given */
+    struct wsg_endpoint web;     /* the web page (loopback default) */
     double time_scale;           /* simulated seconds per real second */
     const char *log_path;        /* NULL: no log; "-": stderr */
     const char *config_path;     /* --config FILE, read before the options */

@@ -256,11 +256,11 @@ n=$(grep -c '^[a-z-]* = ' "$S/all.conf") || true
 echo "    $n settings"
 start_emu all "$P/bin/wsgemu" --config "$S/all.conf" \
     --tcp 127.0.0.1:0 --udp 127.0.0.1:0:1501 --pty "$S/tty" \
-    --control 127.0.0.1:0 --log "$S/comm.log"
+    --control 127.0.0.1:0 --web 127.0.0.1:0 --log "$S/comm.log"
 echo "    $READY"
 case $READY in
-*" pty=$S/tty"*" control=127.0.0.1:"*) ;;
-*) fail "the ready line lacks the pty or the control channel: '$READY'" ;;
+*" pty=$S/tty"*" control=127.0.0.1:"*" web=127.0.0.1:"*) ;;
+*) fail "the ready line lacks the pty, the control channel or the web page: '$READY'" ;;
 esac
 check "the example's tag and model hold: tag 'cell 4', WSG 50"
 ctl "$P/bin/wsgctl" "$(tcp_port)" -q tag

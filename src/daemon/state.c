@@ -1,0 +1,98 @@
+/*
+ * The gripper's state as JSON (state.h). Numbers are printed at the
+ * precision a viewer can use (micrometres, mN, hundredths of a degree),
+ * so a change below it is no change: the web page's pushes compare these
+ * texts, not the model's doubles.
+ */
+#include "state.h"
+
+#include <stdarg.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "wsg/schema.h"
+
+/* Appends to buf at *used; what does not fit is cut, never overrun. */
+static void append(char *buf, size_t cap, size_t *used, const char *fmt, ...)
+{
+    va_list ap;
+    int n;
+
+    if (*used + 1 >= cap)
+        return;
+    va_start(ap, fmt);
+    n = vsnprintf(buf + *used, cap - *used, fmt, ap);
+    va_end(ap);
+    if (n > 0)
+        *used += (size_t)n < cap - *used ? (size_t)n : cap - *used - 1;
+}
+
+void wsg_state_format_time(char *buf, size_t len, uint64_t us)
+{
+    char frac[8];
+    int digits = 6;
+
+    snprintf(frac, sizeof frac, "%06u", (unsigned)(us % 1000000u));
+    while (digits > 3 && frac[digits - 1] == '0')
+        digits--;
+    frac[digits] = '\0';
+    snprintf(buf, len, "%llu.%s", (unsigned long long)(us / 1000000u), frac);
+}
+
+size_t wsg_state_format(char *buf, size_t cap, const struct wsg_gripper *g,
+                        const struct wsg_sched *s, enum wsg_state_parts parts)
+{
+    const struct wsg_device *d = &g->dev;
+    const struct wsg_axis *ax = wsg_device_axis_const(d);
+    uint32_t flags = wsg_device_flags(d);
+    unsigned gs = (unsigned)wsg_axis_grasp_state(ax);
+    struct wsg_grasp_stats stats = wsg_axis_stats(ax);
+    char t[32], key[32], gs_key[32];
+    double part_width, stiffness;
+    size_t used = 0;
+    unsigned i;
+    int first = 1;
+
+    if (cap == 0)
+        return 0;
+    buf[0] = '\0';
+    append(buf, cap, &used,
+           "{\"width\":%.3f,\"speed\":%.3f,\"force\":%.3f,"
+           "\"temperature\":%.2f,\"flags\":%lu,\"flag_names\":[",
+           wsg_axis_width(ax), wsg_axis_speed(ax), wsg_axis_force(ax),
+           wsg_axis_temperature(ax), (unsigned long)flags);
+    /* The manual's names in the channel's spelling ("fast_stop"). */
+    for (i = 0; i < 32; i++) {
+        if (!(flags & (1u << i)) || !wsg_system_flag_names[i])
+            continue;
+        wsg_schema_key(wsg_system_flag_names[i], key, sizeof key);
+        append(buf, cap, &used, "%s\"%s\"", first ? "" : ",", key);
+        first = 0;
+    }
+    if (gs < WSG_GS_COUNT)
+        wsg_schema_key(wsg_grasp_state_names[gs], gs_key, sizeof gs_key);
+    else
+        strcpy(gs_key, "unknown");
+    append(buf, cap, &used,
+           "],\"grasp_state\":%u,\"grasp_state_name\":\"%s\","
+           "\"stats\":{\"total\":%lu,\"no_part\":%u,\"lost_part\":%u},",
+           gs, gs_key, (unsigned long)stats.total, (unsigned)stats.no_part,
+           (unsigned)stats.lost_part);
+    if (parts != WSG_STATE_NO_TIME) {
+        wsg_state_format_time(t, sizeof t, wsg_axis_time(ax));
+        append(buf, cap, &used, "\"time\":%s,", t);
+    }
+    append(
+        buf, cap, &used,
+        "\"paused\":%s,\"scale\":%g,\"delayed\":%lu,\"delay_dropped\":%llu,",
+        s->paused ? "true" : "false", s->scale,
+        (unsigned long)wsg_gripper_delayed(g),
+        (unsigned long long)wsg_gripper_delay_dropped(g));
+    /* The world's part too: the web page draws it between the fingers. */
+    if (wsg_axis_part(ax, &part_width, &stiffness))
+        append(buf, cap, &used, "\"part\":{\"width\":%.3f,\"stiffness\":%g}}",
+               part_width, stiffness);
+    else
+        append(buf, cap, &used, "\"part\":null}");
+    return used;
+}

@@ -1,0 +1,375 @@
+/*
+ * The tests' HTTP client (emu_http.h). Connections are blocking sockets
+ * read under poll() with a deadline; the chunked decoder works on what
+ * has arrived and leaves a chunk that is not whole for the next read.
+ */
+#define _GNU_SOURCE
+
+#include "emu_http.h"
+
+#include <arpa/inet.h>
+#include <errno.h>
+#include <netinet/in.h>
+#include <poll.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include "emu.h"
+
+static int http_connect(const char *addr)
+{
+    struct sockaddr_in sa;
+    char host[64];
+    const char *colon = strrchr(addr, ':');
+    int fd;
+
+    if (!colon || (size_t)(colon - addr) >= sizeof host)
+        return -1;
+    memcpy(host, addr, (size_t)(colon - addr));
+    host[colon - addr] = '\0';
+    memset(&sa, 0, sizeof sa);
+    sa.sin_family = AF_INET;
+    sa.sin_port = htons((uint16_t)atoi(colon + 1));
+    if (inet_pton(AF_INET, host, &sa.sin_addr) != 1)
+        return -1;
+    fd = socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
+    if (fd < 0)
+        return -1;
+    if (connect(fd, (struct sockaddr *)&sa, sizeof sa) < 0) {
+        fprintf(stderr, "http: connect %s: %s\n", addr, strerror(errno));
+        close(fd);
+        return -1;
+    }
+    return fd;
+}
+
+static int send_all(int fd, const char *p, size_t n)
+{
+    while (n > 0) {
+        ssize_t w = send(fd, p, n, MSG_NOSIGNAL);
+
+        if (w < 0 && errno == EINTR)
+            continue;
+        if (w <= 0)
+            return -1;
+        p += w;
+        n -= (size_t)w;
+    }
+    return 0;
+}
+
+/* One read within the time left until deadline (emu_now_ms() clock).
+ * Bytes read, 0 at the end, -1 on timeout, -2 on error. */
+static long read_some(int fd, char *buf, size_t cap, double deadline)
+{
+    struct pollfd pfd = {fd, POLLIN, 0};
+    double left = deadline - emu_now_ms();
+    ssize_t n;
+    int r;
+
+    if (cap == 0)
+        return -2;
+    r = poll(&pfd, 1, left > 0 ? (int)left + 1 : 0);
+    if (r == 0)
+        return -1;
+    if (r < 0)
+        return errno == EINTR ? -1 : -2;
+    n = recv(fd, buf, cap, 0);
+    if (n < 0)
+        return errno == EINTR ? -1 : -2;
+    return (long)n;
+}
+
+/* Take the whole chunks of raw into text. -1 on a malformed chunk. */
+static int dechunk(char *raw, size_t *raw_len, char *text, size_t *text_len,
+                   size_t text_cap, int *eof)
+{
+    size_t pos = 0;
+
+    for (;;) {
+        char *end = memmem(raw + pos, *raw_len - pos, "\r\n", 2);
+        unsigned long size;
+        char *stop;
+
+        if (!end)
+            break;
+        size = strtoul(raw + pos, &stop, 16);
+        if (stop == raw + pos)
+            return -1;
+        if ((size_t)(end + 2 - raw) + size + 2 > *raw_len)
+            break; /* not whole yet */
+        if (size == 0) {
+            *eof = 1;
+            pos = (size_t)(end + 2 - raw) + 2;
+            break;
+        }
+        if (*text_len + size >= text_cap)
+            return -1;
+        memcpy(text + *text_len, end + 2, size);
+        *text_len += size;
+        pos = (size_t)(end + 2 - raw) + size + 2;
+    }
+    memmove(raw, raw + pos, *raw_len - pos);
+    *raw_len -= pos;
+    return 0;
+}
+
+/* The end of the head in buf (the blank line), or NULL. */
+static char *head_end(char *buf, size_t len)
+{
+    char *e = memmem(buf, len, "\r\n\r\n", 4);
+
+    return e ? e + 4 : NULL;
+}
+
+/* The value of header name in head (a status line and header lines). */
+static const char *find_header(const char *head, const char *name, char *buf,
+                               size_t cap)
+{
+    const char *p = strstr(head, "\r\n");
+    size_t n = strlen(name);
+
+    while (p && p[2] != '\r' && p[2] != '\0') {
+        const char *line = p + 2, *eol = strstr(line, "\r\n");
+
+        if (!eol)
+            break;
+        if (strncasecmp(line, name, n) == 0 && line[n] == ':') {
+            const char *v = line + n + 1;
+            size_t len;
+
+            while (*v == ' ')
+                v++;
+            len = (size_t)(eol - v) < cap - 1 ? (size_t)(eol - v) : cap - 1;
+            memcpy(buf, v, len);
+            buf[len] = '\0';
+            return buf;
+        }
+        p = eol;
+    }
+    return NULL;
+}
+
+const char *http_header(const struct http_answer *a, const char *name,
+                        char *buf, size_t cap)
+{
+    return find_header(a->head, name, buf, cap);
+}
+
+static int is_chunked(const char *head)
+{
+    char v[64];
+
+    return find_header(head, "Transfer-Encoding", v, sizeof v) &&
+           strcasecmp(v, "chunked") == 0;
+}
+
+int http_request(const char *addr, const char *method, const char *path,
+                 const char *headers, const char *body, struct http_answer *a,
+                 int timeout_ms)
+{
+    static char buf[HTTP_HEAD_MAX + 2 * HTTP_BODY_MAX];
+    char req[HTTP_HEAD_MAX];
+    double deadline = emu_now_ms() + timeout_ms;
+    size_t len = 0, hlen, blen;
+    char *he;
+    int fd, n, eof = 0;
+
+    memset(a, 0, sizeof *a);
+    n = snprintf(req, sizeof req,
+                 "%s %s HTTP/1.1\r\nHost: %s\r\nConnection: close\r\n%s",
+                 method, path, addr, headers ? headers : "");
+    if (body)
+        n += snprintf(req + n, sizeof req - (size_t)n,
+                      "Content-Length: %zu\r\n", strlen(body));
+    n += snprintf(req + n, sizeof req - (size_t)n, "\r\n");
+    if (n < 0 || (size_t)n >= sizeof req)
+        return -1;
+    fd = http_connect(addr);
+    if (fd < 0)
+        return -1;
+    if (send_all(fd, req, (size_t)n) < 0 ||
+        (body && send_all(fd, body, strlen(body)) < 0)) {
+        fprintf(stderr, "http: %s %s: send failed\n", method, path);
+        close(fd);
+        return -1;
+    }
+    for (;;) {
+        long r = read_some(fd, buf + len, sizeof buf - 1 - len, deadline);
+
+        if (r == 0)
+            break;
+        if (r < 0) {
+            fprintf(stderr, "http: %s %s: %s\n", method, path,
+                    r == -1 ? "timeout" : "read failed");
+            close(fd);
+            return -1;
+        }
+        len += (size_t)r;
+    }
+    close(fd);
+    buf[len] = '\0';
+    he = head_end(buf, len);
+    if (!he || sscanf(buf, "HTTP/1.%*d %d", &a->status) != 1) {
+        fprintf(stderr, "http: %s %s: no HTTP answer\n", method, path);
+        return -1;
+    }
+    hlen = (size_t)(he - buf);
+    if (hlen >= sizeof a->head)
+        return -1;
+    memcpy(a->head, buf, hlen);
+    a->head[hlen] = '\0';
+    blen = len - hlen;
+    if (is_chunked(a->head)) {
+        if (dechunk(he, &blen, a->body, &a->body_len, sizeof a->body, &eof) <
+                0 ||
+            !eof) {
+            fprintf(stderr, "http: %s %s: bad chunked body\n", method, path);
+            return -1;
+        }
+    } else {
+        if (blen >= sizeof a->body)
+            return -1;
+        memcpy(a->body, he, blen);
+        a->body_len = blen;
+    }
+    a->body[a->body_len] = '\0';
+    return 0;
+}
+
+int http_stream_open(struct http_stream *s, const char *addr, const char *path,
+                     int timeout_ms)
+{
+    char req[512];
+    double deadline = emu_now_ms() + timeout_ms;
+    char *he;
+    int n;
+
+    memset(s, 0, sizeof *s);
+    s->fd = -1;
+    n = snprintf(req, sizeof req,
+                 "GET %s HTTP/1.1\r\nHost: %s\r\nAccept: text/event-stream\r\n"
+                 "\r\n",
+                 path, addr);
+    s->fd = http_connect(addr);
+    if (s->fd < 0)
+        return -1;
+    if (send_all(s->fd, req, (size_t)n) < 0)
+        goto fail;
+    while (!(he = head_end(s->raw, s->raw_len))) {
+        long r = read_some(s->fd, s->raw + s->raw_len,
+                           sizeof s->raw - 1 - s->raw_len, deadline);
+
+        if (r <= 0)
+            goto fail;
+        s->raw_len += (size_t)r;
+        s->raw[s->raw_len] = '\0';
+    }
+    /* The head as a string ends with the last header line's \r\n. */
+    *(he - 2) = '\0';
+    if (sscanf(s->raw, "HTTP/1.%*d %d", &s->status) != 1)
+        goto fail;
+    s->chunked = is_chunked(s->raw);
+    if (!find_header(s->raw, "Content-Type", s->type, sizeof s->type))
+        s->type[0] = '\0';
+    memmove(s->raw, he, s->raw_len - (size_t)(he - s->raw));
+    s->raw_len -= (size_t)(he - s->raw);
+    return 0;
+
+fail:
+    fprintf(stderr, "http: GET %s: no answer\n", path);
+    http_stream_close(s);
+    return -1;
+}
+
+/* Copy the value of field in the event ev ("name: value" lines) into buf;
+ * several "data:" lines are joined with newlines, as a browser does. */
+static void event_field(const char *ev, size_t len, const char *field,
+                        char *buf, size_t cap)
+{
+    size_t flen = strlen(field), used = 0, i = 0;
+
+    buf[0] = '\0';
+    while (i < len) {
+        const char *line = ev + i;
+        const char *eol = memchr(line, '\n', len - i);
+        size_t llen = eol ? (size_t)(eol - line) : len - i;
+
+        if (llen > flen && memcmp(line, field, flen) == 0 &&
+            line[flen] == ':') {
+            const char *v = line + flen + 1;
+            size_t vlen = llen - flen - 1;
+
+            if (vlen && *v == ' ')
+                v++, vlen--;
+            if (used && used + 1 < cap)
+                buf[used++] = '\n';
+            if (vlen > cap - 1 - used)
+                vlen = cap - 1 - used;
+            memcpy(buf + used, v, vlen);
+            used += vlen;
+            buf[used] = '\0';
+        }
+        i += llen + 1;
+    }
+}
+
+/* Move what raw holds into text: whole chunks, or all of it unchunked. */
+static int stream_decode(struct http_stream *s)
+{
+    if (s->chunked)
+        return dechunk(s->raw, &s->raw_len, s->text, &s->text_len,
+                       sizeof s->text, &s->eof);
+    if (s->text_len + s->raw_len >= sizeof s->text)
+        return -1;
+    memcpy(s->text + s->text_len, s->raw, s->raw_len);
+    s->text_len += s->raw_len;
+    s->raw_len = 0;
+    return 0;
+}
+
+int http_stream_event(struct http_stream *s, char *name, size_t name_cap,
+                      char *data, size_t data_cap, int timeout_ms)
+{
+    double deadline = emu_now_ms() + timeout_ms;
+
+    for (;;) {
+        char *end;
+        long r;
+
+        /* What came with the head, or with the last event, first. */
+        if (stream_decode(s) < 0)
+            return -1;
+        end = memmem(s->text, s->text_len, "\n\n", 2);
+        if (end) {
+            size_t len = (size_t)(end - s->text);
+
+            event_field(s->text, len, "event", name, name_cap);
+            event_field(s->text, len, "data", data, data_cap);
+            memmove(s->text, end + 2, s->text_len - len - 2);
+            s->text_len -= len + 2;
+            return 1;
+        }
+        if (s->eof)
+            return -1;
+        r = read_some(s->fd, s->raw + s->raw_len,
+                      sizeof s->raw - 1 - s->raw_len, deadline);
+        if (r == -1)
+            return 0;
+        if (r <= 0)
+            s->eof = 1;
+        else
+            s->raw_len += (size_t)r;
+    }
+}
+
+void http_stream_close(struct http_stream *s)
+{
+    if (s->fd >= 0)
+        close(s->fd);
+    s->fd = -1;
+}

@@ -1,0 +1,58 @@
+/*
+ * An HTTP client for the tests of the daemon's web page (--web): plain
+ * requests (one connection each, "Connection: close", the answer read to
+ * its end) and a Server-Sent Events stream read event by event. HTTP/1.1
+ * as the daemon's server speaks it: chunked bodies are decoded, nothing
+ * else of HTTP is needed. Every wait takes a timeout, as everywhere in
+ * the integration tests.
+ */
+#ifndef WSG_TEST_EMU_HTTP_H
+#define WSG_TEST_EMU_HTTP_H
+
+#include <stddef.h>
+
+#define HTTP_HEAD_MAX 4096u
+#define HTTP_BODY_MAX 65536u
+
+struct http_answer {
+    int status;               /* 200; 0: no status line */
+    char head[HTTP_HEAD_MAX]; /* the status line and headers */
+    char body[HTTP_BODY_MAX]; /* decoded, NUL-terminated */
+    size_t body_len;
+};
+
+/* METHOD PATH to addr ("127.0.0.1:PORT") with the extra header lines
+ * headers (each ending in \r\n; NULL: none) and body (NULL: none; a
+ * Content-Length is sent with it). 0, or -1 with a message on stderr. */
+int http_request(const char *addr, const char *method, const char *path,
+                 const char *headers, const char *body, struct http_answer *a,
+                 int timeout_ms);
+/* The value of header name in a (case-insensitive name) into buf; NULL
+ * when absent. */
+const char *http_header(const struct http_answer *a, const char *name,
+                        char *buf, size_t cap);
+
+/* An open GET whose body is read as it comes: an event stream. */
+struct http_stream {
+    int fd;
+    int status;
+    int chunked;
+    char type[64];           /* its Content-Type; "" without one */
+    char raw[HTTP_BODY_MAX]; /* received, not yet decoded */
+    size_t raw_len;
+    char text[HTTP_BODY_MAX]; /* decoded, not yet taken as events */
+    size_t text_len;
+    int eof;
+};
+
+/* Open GET path and read the answer's head. 0 (s->status set), or -1. */
+int http_stream_open(struct http_stream *s, const char *addr, const char *path,
+                     int timeout_ms);
+/* The next whole event: its "event:" name into name and its "data:" into
+ * data (both NUL-terminated, cut to fit). 1: one, 0: none within
+ * timeout_ms, -1: the stream ended or failed. */
+int http_stream_event(struct http_stream *s, char *name, size_t name_cap,
+                      char *data, size_t data_cap, int timeout_ms);
+void http_stream_close(struct http_stream *s);
+
+#endif

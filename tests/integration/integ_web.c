@@ -1,0 +1,349 @@
+/*
+ * integ_web: the gripper's web page (--web) against the real daemon.
+ *
+ * - the ready line ends with web=127.0.0.1:PORT;
+ * - GET / is the page, and its script and style are served with their
+ *   types; HEAD answers without a body; an unknown path is 404, a wrong
+ *   method 405 with Allow, a POST from another site's page (Origin) 403,
+ *   a body over 4 KiB 413;
+ * - GET /state.json is the control channel's state byte for byte (time
+ *   paused, so the two cannot differ in time); GET /info.json has the
+ *   model's stroke and every flag's name by bit;
+ * - /events: a state event at once; then, with nothing happening, none,
+ *   and the daemon does not wake (the scheduler's "wakes" stays, no
+ *   context switches to speak of) for 2 s with the stream open;
+ * - a homing over TCP is pushed as it runs: many events while moving, no
+ *   more than one per 50 ms, the last the final state, then silence;
+ * - POST /stop stops a motion (40h: AXIS_STOPPED, not MOVING, at once; the
+ *   motion ends E_CMD_ABORTED); POST /ack clears a FAST STOP (40h and
+ *   the control channel's state);
+ * - 32 streams at once all see a change; closed by their clients they are
+ *   freed (the daemon's descriptors come back) with no change to push;
+ * - the daemon exits 0 with a stream open.
+ *
+ * Built without libmicrohttpd (WSG_TEST_HAVE_WEB 0) it is skipped.
+ */
+#include "check.h"
+#include "emu.h"
+#include "emu_ctl.h"
+#include "emu_http.h"
+
+#include <dirent.h>
+#include <stdlib.h>
+#include <string.h>
+
+#ifndef WSG_TEST_HAVE_WEB
+#define WSG_TEST_HAVE_WEB 0
+#endif
+
+/* How many event streams at once in the fan-out test. */
+#define NSTREAMS 32
+/* Room for one event's name and data. */
+#define EV_MAX 2048
+/* The largest request body the daemon takes (WSG_WEB_BODY_MAX). */
+#define BODY_MAX 4096
+
+static const char *const args[] = {"--tcp",       "127.0.0.1:0", "--control",
+                                   "127.0.0.1:0", "--web",       "127.0.0.1:0",
+                                   NULL};
+
+static char web[64]; /* the web= field */
+static struct http_answer ans;
+
+static int get(const char *method, const char *path, const char *headers,
+               const char *body)
+{
+    if (http_request(web, method, path, headers, body, &ans, EMU_REPLY_MS) < 0)
+        return -1;
+    return ans.status;
+}
+
+/* A state event within timeout_ms: 1 (its JSON in data), 0 none, -1 the
+ * stream ended. Events of another name fail the check. */
+static int next_state(struct http_stream *s, char *data, int timeout_ms)
+{
+    char name[64];
+    int r = http_stream_event(s, name, sizeof name, data, EV_MAX, timeout_ms);
+
+    if (r == 1)
+        CHECK(strcmp(name, "state") == 0);
+    return r;
+}
+
+static int has_flag(const char *json, const char *name)
+{
+    char quoted[64];
+
+    snprintf(quoted, sizeof quoted, "\"%s\"", name);
+    return strstr(json, quoted) != NULL;
+}
+
+/* Descriptors the daemon holds. */
+static int fd_count(pid_t pid)
+{
+    char path[64];
+    struct dirent *d;
+    DIR *dir;
+    int n = 0;
+
+    snprintf(path, sizeof path, "/proc/%d/fd", (int)pid);
+    dir = opendir(path);
+    if (!dir)
+        return -1;
+    while ((d = readdir(dir)) != NULL)
+        if (d->d_name[0] != '.')
+            n++;
+    closedir(dir);
+    return n;
+}
+
+static void test_ready(const struct emu *e)
+{
+    const char *field = strstr(e->line, " web=");
+
+    CHECK(strncmp(web, "127.0.0.1:", 10) == 0 && atoi(web + 10) > 0);
+    /* The last field of the line. */
+    CHECK(field && !strchr(field + 1, ' '));
+}
+
+static void test_files(void)
+{
+    char v[128];
+
+    CHECK_EQ(get("GET", "/", NULL, NULL), 200);
+    CHECK(http_header(&ans, "Content-Type", v, sizeof v) &&
+          strncmp(v, "text/html", 9) == 0);
+    CHECK(strncmp(ans.body, "<!DOCTYPE html>", 15) == 0);
+    CHECK(strstr(ans.body, "/app.js") && strstr(ans.body, "/style.css"));
+    CHECK(strstr(ans.body, "id=\"stop\"") && strstr(ans.body, "id=\"ack\""));
+    CHECK_EQ(get("GET", "/index.html", NULL, NULL), 200);
+    CHECK_EQ(get("GET", "/app.js", NULL, NULL), 200);
+    CHECK(http_header(&ans, "Content-Type", v, sizeof v) &&
+          strncmp(v, "text/javascript", 15) == 0);
+    CHECK(strstr(ans.body, "new EventSource('/events')") != NULL);
+    CHECK_EQ(get("GET", "/style.css", NULL, NULL), 200);
+    CHECK(http_header(&ans, "Content-Type", v, sizeof v) &&
+          strncmp(v, "text/css", 8) == 0);
+    CHECK_EQ(get("HEAD", "/", NULL, NULL), 200);
+    CHECK_EQ(ans.body_len, 0);
+}
+
+static void test_errors(void)
+{
+    char v[128], big[BODY_MAX + 2];
+
+    CHECK_EQ(get("GET", "/nothing", NULL, NULL), 404);
+    CHECK_EQ(get("GET", "/../etc/passwd", NULL, NULL), 404);
+    CHECK_EQ(get("DELETE", "/state.json", NULL, NULL), 405);
+    CHECK(http_header(&ans, "Allow", v, sizeof v) &&
+          strcmp(v, "GET, HEAD") == 0);
+    CHECK_EQ(get("GET", "/stop", NULL, NULL), 405);
+    CHECK(http_header(&ans, "Allow", v, sizeof v) && strcmp(v, "POST") == 0);
+    CHECK_EQ(get("POST", "/events", NULL, NULL), 405);
+    CHECK_EQ(
+        get("POST", "/stop", "Origin: http://elsewhere.example\r\n", NULL),
+        403);
+    memset(big, 'x', sizeof big - 1);
+    big[sizeof big - 1] = '\0';
+    CHECK_EQ(get("POST", "/ack", NULL, big), 413);
+}
+
+static void test_state(struct ctl *k)
+{
+    const char *js;
+    char v[128];
+
+    CMD_OK(k, "time pause");
+    CHECK_EQ(get("GET", "/state.json", NULL, NULL), 200);
+    CHECK(http_header(&ans, "Content-Type", v, sizeof v) &&
+          strcmp(v, "application/json") == 0);
+    js = ctl_cmd(k, "state");
+    CHECK(strncmp(js, "ok ", 3) == 0 && strcmp(js + 3, ans.body) == 0);
+    if (strncmp(js, "ok ", 3) != 0 || strcmp(js + 3, ans.body) != 0)
+        fprintf(stderr, "control: %s\nweb:     %s\n", js, ans.body);
+    CMD_OK(k, "time resume");
+
+    CHECK_EQ(get("GET", "/info.json", NULL, NULL), 200);
+    CHECK_NEAR(ctl_json_num(ans.body, "stroke"), 110.0, 1e-9);
+    CHECK(strstr(ans.body, "\"flag_names\":[\"referenced\",\"moving\",") !=
+          NULL);
+    CHECK(strstr(ans.body, "\"fast_stop\"") != NULL);
+}
+
+/* Idle with a stream open: nothing pushed, nothing woken. */
+static void test_idle(struct emu *e, struct ctl *k, struct http_stream *s)
+{
+    char data[EV_MAX];
+    long sw0, sw1, t0, t1;
+    double wakes0, wakes1;
+
+    wakes0 = ctl_json_num(ctl_cmd(k, "stats"), "wakes");
+    emu_sleep_ms(100);
+    REQUIRE(emu_proc_activity(e->pid, &sw0, &t0) == 0);
+    CHECK_EQ(next_state(s, data, emu_ms(2000)), 0);
+    REQUIRE(emu_proc_activity(e->pid, &sw1, &t1) == 0);
+    wakes1 = ctl_json_num(ctl_cmd(k, "stats"), "wakes");
+    CHECK(wakes0 >= 0);
+    CHECK_EQ(wakes1, wakes0);
+    /* A timer of the web page's (MHD's timeouts, the pushes) would show
+     * as switches too: a handful at most, as for any idle daemon. */
+    CHECK(sw1 - sw0 <= 5);
+    CHECK(t1 - t0 <= 2);
+}
+
+/* A homing at half speed (about 1.8 s) watched through the stream. */
+static void test_push(struct emu_client *c, struct ctl *k,
+                      struct http_stream *s)
+{
+    char data[EV_MAX], last[EV_MAX] = "";
+    struct wsg_client_frame f;
+    uint8_t dir = 0;
+    int moving = 0, n = 0, r;
+    double first = 0, t = 0;
+
+    CMD_OK(k, "time scale 0.5");
+    CHECK_EQ(emu_request(c, WSG_CMD_HOMING, &dir, 1, NULL, EMU_REPLY_MS),
+             WSG_E_CMD_PENDING);
+    while ((r = next_state(s, data, EMU_HOMING_MS * 2)) == 1) {
+        t = emu_now_ms();
+        if (n++ == 0)
+            first = t;
+        snprintf(last, sizeof last, "%s", data);
+        if (has_flag(data, "moving"))
+            moving++;
+        else if (has_flag(data, "referenced"))
+            break;
+    }
+    CHECK_EQ(r, 1);
+    /* About 35 at 20 a second; many fewer would not be a live view. */
+    CHECK(moving >= 8);
+    /* Never more than one per 50 ms (a little slack for the reads). */
+    CHECK((double)(n - 1) <= (t - first + 100.0) / 50.0);
+    if (moving < 8 || (double)(n - 1) > (t - first + 100.0) / 50.0)
+        fprintf(stderr, "%d events, %d moving, over %.0f ms\n", n, moving,
+                t - first);
+    CHECK_NEAR(ctl_json_num(last, "width"), 110.0, 1e-9);
+    CHECK_NEAR(ctl_json_num(last, "speed"), 0.0, 1e-9);
+    CHECK_EQ(emu_recv_id(c, WSG_CMD_HOMING, &f, EMU_HOMING_MS * 2), 1);
+    CHECK_EQ(f.status, WSG_E_SUCCESS);
+    /* Done: nothing more to push. */
+    CHECK_EQ(next_state(s, data, EMU_QUIET_MS), 0);
+    CMD_OK(k, "time scale 1");
+}
+
+static void test_stop_ack(struct emu_client *c, struct ctl *k,
+                          struct http_stream *s)
+{
+    struct wsg_client_frame f;
+    uint8_t p[16];
+    size_t n = emu_move_payload(p, 0, 20.0f, 10.0f);
+    uint32_t flags = 0;
+    char data[EV_MAX];
+
+    /* STOP: a slow move stopped from the page. */
+    CMD_OK(k, "time scale 0.2");
+    CHECK_EQ(emu_request(c, WSG_CMD_PREPOSITION, p, n, NULL, EMU_REPLY_MS),
+             WSG_E_CMD_PENDING);
+    CHECK(emu_wait_flags(c, WSG_SF_MOVING, WSG_SF_MOVING, EMU_MOVE_MS, NULL) ==
+          0);
+    CHECK_EQ(get("POST", "/stop", NULL, NULL), 200);
+    CHECK(strcmp(ans.body, "{\"status\":\"E_SUCCESS\"}") == 0);
+    CHECK(emu_get_flags(c, &flags) == 0);
+    CHECK(flags & WSG_SF_AXIS_STOPPED);
+    CHECK(!(flags & WSG_SF_MOVING));
+    CHECK_EQ(emu_recv_id(c, WSG_CMD_PREPOSITION, &f, EMU_MOVE_MS), 1);
+    CHECK_EQ(f.status, WSG_E_CMD_ABORTED);
+    CMD_OK(k, "time scale 1");
+
+    /* ACK: a FAST STOP acknowledged from the page; a POST from the page's
+     * own origin is taken. */
+    CHECK_EQ(emu_request(c, WSG_CMD_FAST_STOP, NULL, 0, NULL, EMU_REPLY_MS),
+             WSG_E_SUCCESS);
+    CHECK(emu_get_flags(c, &flags) == 0 && (flags & WSG_SF_FAST_STOP));
+    CHECK(has_flag(ctl_cmd(k, "state"), "fast_stop"));
+    {
+        char origin[128];
+
+        snprintf(origin, sizeof origin, "Origin: http://%s\r\n", web);
+        CHECK_EQ(get("POST", "/ack", origin, NULL), 200);
+    }
+    CHECK(strcmp(ans.body, "{\"status\":\"E_SUCCESS\"}") == 0);
+    CHECK(emu_get_flags(c, &flags) == 0 && !(flags & WSG_SF_FAST_STOP));
+    CHECK(!has_flag(ctl_cmd(k, "state"), "fast_stop"));
+    /* The stream saw it come and go (the newest state at least). */
+    while (next_state(s, data, EMU_QUIET_MS * 2) == 1)
+        ;
+    CHECK(!has_flag(data, "fast_stop"));
+}
+
+/* Many streams see one change; closed by their clients, all are freed
+ * without a change to push them out. */
+static void test_many(struct emu *e, struct ctl *k)
+{
+    struct http_stream *s = calloc(NSTREAMS, sizeof *s);
+    char data[EV_MAX];
+    int base, i, got = 0, fds = -1;
+    double deadline;
+
+    REQUIRE(s != NULL);
+    base = fd_count(e->pid);
+    CHECK(base > 0);
+    for (i = 0; i < NSTREAMS; i++) {
+        REQUIRE(http_stream_open(&s[i], web, "/events", EMU_REPLY_MS) == 0);
+        CHECK_EQ(s[i].status, 200);
+        CHECK_EQ(next_state(&s[i], data, EMU_REPLY_MS), 1);
+    }
+    CMD_OK(k, "part 30");
+    for (i = 0; i < NSTREAMS; i++)
+        if (next_state(&s[i], data, EMU_REPLY_MS) == 1 &&
+            strstr(data, "\"part\":{\"width\":30.000"))
+            got++;
+    CHECK_EQ(got, NSTREAMS);
+    for (i = 0; i < NSTREAMS; i++)
+        http_stream_close(&s[i]);
+    deadline = emu_now_ms() + EMU_REPLY_MS;
+    while (emu_now_ms() < deadline && (fds = fd_count(e->pid)) > base)
+        emu_sleep_ms(20);
+    CHECK_EQ(fds, base);
+    CMD_OK(k, "part none");
+    free(s);
+}
+
+int main(int argc, char **argv)
+{
+    const char *exe = emu_exe(argc, argv);
+    static struct http_stream s;
+    char data[EV_MAX];
+    struct emu_client c;
+    struct emu e;
+    struct ctl k;
+
+    if (!WSG_TEST_HAVE_WEB)
+        test_skip("wsgemu was built without libmicrohttpd");
+    REQUIRE(emu_start(&e, exe, args) == 0);
+    REQUIRE(emu_field(&e, "web", web, sizeof web) != NULL);
+    REQUIRE(ctl_open(&k, &e) == 0);
+    REQUIRE(emu_open(&c, &e, &emu_tcp) == 0);
+
+    test_ready(&e);
+    REQUIRE(http_stream_open(&s, web, "/events", EMU_REPLY_MS) == 0);
+    CHECK_EQ(s.status, 200);
+    CHECK(strcmp(s.type, "text/event-stream") == 0);
+    CHECK(s.chunked);
+    REQUIRE(next_state(&s, data, EMU_REPLY_MS) == 1);
+    CHECK_NEAR(ctl_json_num(data, "width"), 55.0, 1e-9);
+    test_idle(&e, &k, &s);
+    test_files();
+    test_errors();
+    test_state(&k);
+    test_push(&c, &k, &s);
+    test_stop_ack(&c, &k, &s);
+    test_many(&e, &k);
+
+    /* Closing with a stream open (suspended, waiting for a change). */
+    emu_close(&c);
+    ctl_close(&k);
+    CHECK_EQ(emu_stop(&e), 0);
+    http_stream_close(&s);
+    TEST_EXIT();
+}
