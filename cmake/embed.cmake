@@ -1,6 +1,6 @@
 # cmake -DOUT=FILE.c -DBASE=DIR -DFILES="a;b;..." -P embed.cmake
 # Writes FILE.c with each of FILES (paths under BASE) as a byte array and
-# the table wsg_web_assets (src/daemon/web_assets.h) that names them by
+# the table wsg_web_assets (src/daemon/web/assets.h) that names them by
 # URL path ("/index.html") with their Content-Type. Bytes, not a string
 # literal: C99 promises string literals of 4095 bytes only, and a page is
 # longer.
@@ -38,7 +38,7 @@ endforeach()
 
 file(WRITE ${OUT}.tmp
 "/* Generated from web/ by cmake/embed.cmake at build time: do not edit. */
-#include \"web_assets.h\"
+#include \"web/assets.h\"
 
 ${body}const struct wsg_web_asset wsg_web_assets[] = {
 ${table}    {NULL, NULL, NULL, 0}};

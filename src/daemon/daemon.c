@@ -147,7 +147,8 @@ static int open_gripper(struct wsg_daemon *d, struct wsg_gripper *g,
     if (o.initial_part.given)
         wsg_axis_set_part(wsg_device_axis(&g->dev), o.initial_part.value,
                           o.initial_part_stiffness);
-    if (d->log.f)
+    /* The web page's log view reads the same lines (log.h). */
+    if (d->log.f || d->opt.web_enabled)
         wsg_log_attach(&d->log, &g->tap, &g->dev,
                        d->opt.grippers > 1 ? (int)index : -1);
     g->dev.lookup = gripper_lookup;
@@ -362,8 +363,7 @@ int wsg_daemon_open(struct wsg_daemon *d)
     if (d->opt.web_enabled) {
         char err[512];
 
-        r = wsg_web_open(&d->web, &d->reactor, &d->sched, &d->opt.web, err,
-                         sizeof err);
+        r = wsg_web_open(&d->web, d, err, sizeof err);
         if (r < 0) {
             fprintf(stderr, "wsgemu: %s\n", err);
             return r;
@@ -492,7 +492,7 @@ void wsg_daemon_close(struct wsg_daemon *d)
     free(d->rx);
     d->rx = NULL;
     /* Last: closing peers may still log their final packets. */
-    if (d->grippers && d->log.f) {
+    if (d->grippers && (d->log.f || d->opt.web_enabled)) {
         size_t i;
 
         for (i = 0; i < d->opt.grippers; i++)

@@ -210,7 +210,17 @@ static void emit(struct wsg_log *lg, struct line *l)
     if (l->n >= sizeof l->s - 1)
         l->n = sizeof l->s - 2; /* a cut line still ends its line */
     l->s[l->n++] = '\n';
-    fwrite(l->s, 1, l->n, lg->f);
+    if (lg->f)
+        fwrite(l->s, 1, l->n, lg->f);
+    if (lg->sink)
+        lg->sink(lg->sink_ctx, l->s, l->n);
+}
+
+/* Is anyone reading lines? Taps stay attached while no one is (the web
+ * page's view comes and goes); a line is then not even made. */
+static int wanted(const struct wsg_log *lg)
+{
+    return lg->f || lg->sink;
 }
 
 static void log_in(void *ctx, const struct wsg_session *s,
@@ -219,6 +229,8 @@ static void log_in(void *ctx, const struct wsg_session *s,
     struct wsg_log_tap *tap = ctx;
     struct line l;
 
+    if (!wanted(tap->log))
+        return;
     l.n = 0;
     head(tap, &l, s, "in", f->id);
     if (ev == WSG_PARSE_BAD_CRC)
@@ -264,6 +276,8 @@ static void log_out(void *ctx, const struct wsg_session *s, const uint8_t *pkt,
     struct line l;
     size_t n;
 
+    if (!wanted(tap->log))
+        return;
     if (s->flags & WSG_SESSION_TEXT) {
         log_text(tap, s, "out", (const char *)pkt, len);
         return;
@@ -345,7 +359,7 @@ void wsg_log_text(struct wsg_log_tap *tap, const char *who, const char *text,
 {
     struct line l;
 
-    if (!tap->log || !tap->log->f)
+    if (!tap->log || !wanted(tap->log))
         return;
     while (len > 0) {
         const char *nl = memchr(text, '\n', len);
@@ -361,6 +375,14 @@ void wsg_log_text(struct wsg_log_tap *tap, const char *who, const char *text,
         text += n;
         len -= n;
     }
+}
+
+void wsg_log_sink(struct wsg_log *l,
+                  void (*fn)(void *ctx, const char *line, size_t len),
+                  void *ctx)
+{
+    l->sink = fn;
+    l->sink_ctx = ctx;
 }
 
 void wsg_log_flush(struct wsg_log *l)

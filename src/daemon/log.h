@@ -41,6 +41,11 @@ struct wsg_log {
     char *buf;     /* setvbuf's buffer, owned */
     time_t sec;    /* wall clock second that clock[] shows */
     char clock[9]; /* "HH:MM:SS" of sec, cached: localtime per line costs */
+    /* A second reader of every line (the web page's log view), newline
+     * included; NULL: none. Lines are made only when f or sink wants
+     * them. */
+    void (*sink)(void *ctx, const char *line, size_t len);
+    void *sink_ctx;
 };
 
 /* One device's hook into the log (its trace context). */
@@ -64,6 +69,10 @@ void wsg_log_detach(struct wsg_log_tap *tap, struct wsg_device *d);
  * attached. */
 void wsg_log_text(struct wsg_log_tap *tap, const char *who, const char *text,
                   size_t len);
+/* Have every line also handed to fn (NULL: no more). */
+void wsg_log_sink(struct wsg_log *l,
+                  void (*fn)(void *ctx, const char *line, size_t len),
+                  void *ctx);
 /* Write out what is buffered (after a batch of events). */
 void wsg_log_flush(struct wsg_log *l);
 /* Flush and close; safe on a log never opened (zeroed). */

@@ -29,14 +29,17 @@
 /* A request body larger than this is refused (413) before more of it is
  * read. */
 #define WSG_WEB_BODY_MAX 4096u
+/* A script uploaded to the script directory may be this large. */
+#define WSG_WEB_UPLOAD_MAX (256u * 1024u)
 
 struct wsg_web;
+struct wsg_daemon;
 
-/* A web server on ep showing the scheduler's first gripper. On failure
- * put a one-line reason in err and return -errno (*out NULL). */
-int wsg_web_open(struct wsg_web **out, struct wsg_reactor *reactor,
-                 struct wsg_sched *sched, const struct wsg_endpoint *ep,
-                 char *err, size_t errlen);
+/* A web server on the daemon's --web endpoint showing its first gripper.
+ * On failure put a one-line reason in err and return -errno (*out
+ * NULL). */
+int wsg_web_open(struct wsg_web **out, struct wsg_daemon *d, char *err,
+                 size_t errlen);
 /* The address it listens on, for the ready line. */
 int wsg_web_describe(const struct wsg_web *web, char *buf, size_t len);
 /* Close every connection and the socket; safe on NULL. */

@@ -8,13 +8,10 @@
 #include <errno.h>
 #include <stdio.h>
 
-int wsg_web_open(struct wsg_web **out, struct wsg_reactor *reactor,
-                 struct wsg_sched *sched, const struct wsg_endpoint *ep,
-                 char *err, size_t errlen)
+int wsg_web_open(struct wsg_web **out, struct wsg_daemon *d, char *err,
+                 size_t errlen)
 {
-    (void)reactor;
-    (void)sched;
-    (void)ep;
+    (void)d;
     *out = NULL;
     snprintf(err, errlen,
              "--web: this wsgemu was built without libmicrohttpd "

@@ -33,7 +33,7 @@
  */
 #define _GNU_SOURCE
 
-#include "web.h"
+#include "impl.h"
 
 #include <errno.h>
 #include <fcntl.h>
@@ -48,15 +48,13 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "assets.h"
 #include "gripper.h"
 #include "state.h"
-#include "web_assets.h"
 #include "wsg/schema.h"
 
 #define NS_PER_S  1000000000ull
 #define NS_PER_MS 1000000ull
-/* "event: state\ndata: " and the blank line that ends an event. */
-#define WEB_EVENT_MAX (WSG_STATE_JSON_MAX + 32u)
 /* An HTTP connection that sends nothing is closed after this; a browser
  * keeps one open after loading the page. A suspended event stream does
  * not time out (MHD stops its clock while suspended). */
@@ -68,56 +66,21 @@
 #define WEB_RUN_ROUNDS 4
 #define WEB_INFO_MAX   1536u
 
-struct web_sub;
-
-struct wsg_web {
-    struct wsg_reactor *reactor;
-    struct wsg_sched *sched;
-    struct wsg_gripper *g; /* the gripper the page shows: the first */
-    struct MHD_Daemon *mhd;
-    struct wsg_watch mhd_watch; /* MHD's epoll descriptor; fd -1: none */
-    struct wsg_watch timer;     /* timerfd; fd -1: none */
-    int hooked;                 /* the after-batch hook is added */
-    int in_run;                 /* inside MHD_run */
-    int kicked;                 /* a connection resumed: MHD must run */
-    char local[WSG_ADDR_LEN];
-    /* CLOCK_MONOTONIC deadlines, 0 for none: MHD wants to run by mhd_due
-     * (a connection's timeout, or work it left for the next round), a
-     * change waits to be pushed at push_due; the timer is armed for the
-     * earlier one (armed). */
-    uint64_t mhd_due;
-    uint64_t push_due;
-    uint64_t armed;
-    /* The event stream: its subscribers, and the newest event. */
-    struct web_sub *subs;
-    size_t nsubs;
-    uint64_t seq;    /* the newest event's number; 0: none yet */
-    uint64_t pushed; /* when it was made */
-    size_t key_len;
-    char key[WSG_STATE_JSON_MAX]; /* its state without the time */
-    size_t event_len;
-    char event[WEB_EVENT_MAX];
-};
-
 /* One client of /events. It sends its own copy of an event, so a newer
  * one can be made while it is half sent; a slow client skips to the
- * newest, never queues. */
+ * newest state, never queues states. The log is read from the ring at the
+ * client's own offset, a chunk of whole lines at a time. */
 struct web_sub {
     struct wsg_web *web;
     struct MHD_Connection *conn;
     struct wsg_watch hup; /* its socket while suspended; fd -1: not */
     int suspended;
-    int gone;     /* hung up: end the stream */
-    uint64_t seq; /* the event it has (or is sending) */
+    int gone;         /* hung up: end the stream */
+    uint64_t seq;     /* the state event it has (or is sending) */
+    uint64_t log_off; /* the log bytes it has */
     size_t len, off;
-    char buf[WEB_EVENT_MAX];
+    char buf[WSG_WEB_LOG_EVENT_MAX];
     struct web_sub *prev, *next;
-};
-
-/* What a request carries from one call of the handler to the next. */
-struct web_req {
-    size_t body; /* bytes of body received */
-    int refused; /* answered already (a body too large) */
 };
 
 static uint64_t mono_ns(void)
@@ -260,6 +223,77 @@ static void on_hup(struct wsg_watch *w, uint32_t events)
     web_run(sub->web);
 }
 
+static size_t put_bytes(char *buf, size_t used, const char *p, size_t n)
+{
+    memcpy(buf + used, p, n);
+    return used + n;
+}
+
+/* The next "log" event for sub: the lines it has not had, as many whole
+ * ones as fit, each a "data:" line. A client that fell behind the ring
+ * starts again at its oldest whole line, told how much it missed. */
+static size_t log_event(struct wsg_web *web, struct web_sub *sub)
+{
+    static const char head[] = "event: log\n";
+    const uint64_t oldest = web->log_head > WSG_WEB_LOG_RING
+                                ? web->log_head - WSG_WEB_LOG_RING
+                                : 0;
+    const size_t cap = sizeof sub->buf;
+    size_t used = put_bytes(sub->buf, 0, head, sizeof head - 1);
+    char note[64];
+    int n;
+
+    if (sub->log_off < oldest) {
+        n = snprintf(note, sizeof note, "data: (%llu bytes of log missed)\n",
+                     (unsigned long long)(oldest - sub->log_off));
+        used = put_bytes(sub->buf, used, note, (size_t)n);
+        sub->log_off = oldest;
+        /* The ring's oldest byte may be inside a line. */
+        while (sub->log_off < web->log_pushed &&
+               web->log_ring[sub->log_off++ % WSG_WEB_LOG_RING] != '\n')
+            ;
+    }
+    while (sub->log_off < web->log_pushed) {
+        uint64_t end = sub->log_off;
+        size_t len, room;
+
+        while (end < web->log_pushed &&
+               web->log_ring[end % WSG_WEB_LOG_RING] != '\n')
+            end++;
+        len = (size_t)(end - sub->log_off);
+        /* "data: ", the line, its newline, and the event's blank line. */
+        room = cap - used - 8;
+        if (len > room) {
+            if (used > sizeof head - 1)
+                break;  /* the next event takes it */
+            len = room; /* a line longer than an event: cut */
+        }
+        used = put_bytes(sub->buf, used, "data: ", 6);
+        while (len--)
+            sub->buf[used++] =
+                web->log_ring[sub->log_off++ % WSG_WEB_LOG_RING];
+        sub->buf[used++] = '\n';
+        sub->log_off = end + 1;
+    }
+    sub->buf[used++] = '\n';
+    return used;
+}
+
+void wsg_web_log_line(struct wsg_web *web, const char *line, size_t len)
+{
+    size_t at, first;
+
+    /* Only while someone watches (the ring is there), and a log line is
+     * far shorter than the ring. */
+    if (!web->log_ring || len > WSG_WEB_LOG_RING)
+        return;
+    at = (size_t)(web->log_head % WSG_WEB_LOG_RING);
+    first = WSG_WEB_LOG_RING - at < len ? WSG_WEB_LOG_RING - at : len;
+    memcpy(web->log_ring + at, line, first);
+    memcpy(web->log_ring, line + first, len - first);
+    web->log_head += len;
+}
+
 /* MHD asks for the next bytes of the stream. */
 static ssize_t sub_read(void *cls, uint64_t pos, char *buf, size_t max)
 {
@@ -273,16 +307,19 @@ static ssize_t sub_read(void *cls, uint64_t pos, char *buf, size_t max)
     if (sub->gone)
         return MHD_CONTENT_READER_END_OF_STREAM;
     if (sub->off == sub->len) {
-        if (sub->seq == web->seq) {
+        if (sub->seq != web->seq) {
+            memcpy(sub->buf, web->event, web->event_len);
+            sub->len = web->event_len;
+            sub->seq = web->seq;
+        } else if (sub->log_off < web->log_pushed) {
+            sub->len = log_event(web, sub);
+        } else {
             /* Returning 0 has MHD ask again at its next run: suspended,
              * it does not run for this connection until resumed. */
             sub_suspend(sub);
             return 0;
         }
-        memcpy(sub->buf, web->event, web->event_len);
-        sub->len = web->event_len;
         sub->off = 0;
-        sub->seq = web->seq;
     }
     n = sub->len - sub->off < max ? sub->len - sub->off : max;
     memcpy(buf, sub->buf + sub->off, n);
@@ -307,10 +344,13 @@ static void sub_free(void *cls)
         sub->next->prev = sub->prev;
     web->nsubs--;
     free(sub);
+    if (!web->nsubs)
+        wsg_web_world_watch(web, 0);
 }
 
-/* A new event from the gripper's state now (key: it without its time),
- * and every stream that waits for one resumed. */
+/* Push what is new: the state (key: it without its time) when it
+ * changed, and the log lines since the last push; every stream that
+ * waits is resumed. */
 static void web_push(struct wsg_web *web, const char *key, size_t key_len,
                      uint64_t now)
 {
@@ -318,34 +358,41 @@ static void web_push(struct wsg_web *web, const char *key, size_t key_len,
     struct web_sub *sub;
     int n;
 
-    wsg_state_format(json, sizeof json, web->g, web->sched, WSG_STATE_ALL);
-    n = snprintf(web->event, sizeof web->event, "event: state\ndata: %s\n\n",
-                 json);
-    if (n < 0 || (size_t)n >= sizeof web->event)
-        return; /* cannot happen: the room is the state's and the frame's */
-    memcpy(web->key, key, key_len);
-    web->key_len = key_len;
-    web->event_len = (size_t)n;
-    web->seq++;
+    if (key) {
+        wsg_state_format(json, sizeof json, web->g, web->sched, WSG_STATE_ALL);
+        n = snprintf(web->event, sizeof web->event,
+                     "event: state\ndata: %s\n\n", json);
+        if (n < 0 || (size_t)n >= sizeof web->event)
+            return; /* cannot happen: the room is the state's and the
+                       frame's */
+        memcpy(web->key, key, key_len);
+        web->key_len = key_len;
+        web->event_len = (size_t)n;
+        web->seq++;
+    }
+    web->log_pushed = web->log_head;
     web->pushed = now;
     for (sub = web->subs; sub; sub = sub->next)
         sub_resume(sub);
     web_kick(web);
 }
 
-/* Push the state if it changed, or have it pushed when the last push is
- * WSG_WEB_PUSH_MIN_NS old. */
+/* Push the state if it changed and the log if it grew, or have them
+ * pushed when the last push is WSG_WEB_PUSH_MIN_NS old. */
 static void web_check(struct wsg_web *web)
 {
     char key[WSG_STATE_JSON_MAX];
     size_t len;
     uint64_t now;
+    int changed;
 
     if (!web->nsubs || web->push_due)
         return;
     len = wsg_state_format(key, sizeof key, web->g, web->sched,
                            WSG_STATE_NO_TIME);
-    if (web->seq && len == web->key_len && memcmp(key, web->key, len) == 0)
+    changed =
+        !web->seq || len != web->key_len || memcmp(key, web->key, len) != 0;
+    if (!changed && web->log_head == web->log_pushed)
         return;
     now = mono_ns();
     if (web->seq && now - web->pushed < WSG_WEB_PUSH_MIN_NS) {
@@ -353,7 +400,7 @@ static void web_check(struct wsg_web *web)
         web_arm(web);
         return;
     }
-    web_push(web, key, len, now);
+    web_push(web, changed ? key : NULL, len, now);
 }
 
 /* After each batch of the reactor's events. */
@@ -364,22 +411,26 @@ static void web_after(void *ctx)
 
 /* ---- answers ---- */
 
-static enum MHD_Result answer(struct MHD_Connection *conn, unsigned status,
-                              const char *type, const void *body, size_t len,
-                              enum MHD_ResponseMemoryMode mode,
-                              const char *cache)
+enum MHD_Result wsg_web_answer(struct MHD_Connection *conn, unsigned status,
+                               const char *type, const void *body, size_t len,
+                               int is_static)
 {
     struct MHD_Response *r;
     enum MHD_Result ret;
 
     /* MHD_RESPMEM_PERSISTENT does not write to body: the cast only
      * meets the old prototype. */
-    r = MHD_create_response_from_buffer(len, (void *)(uintptr_t)body, mode);
+    r = MHD_create_response_from_buffer(len, (void *)(uintptr_t)body,
+                                        is_static ? MHD_RESPMEM_PERSISTENT
+                                                  : MHD_RESPMEM_MUST_COPY);
     if (!r)
         return MHD_NO;
+    /* The page's own files may be cached (revalidated: the daemon may be
+     * a newer one); answers never. */
     if (MHD_add_response_header(r, MHD_HTTP_HEADER_CONTENT_TYPE, type) !=
             MHD_YES ||
-        MHD_add_response_header(r, MHD_HTTP_HEADER_CACHE_CONTROL, cache) !=
+        MHD_add_response_header(r, MHD_HTTP_HEADER_CACHE_CONTROL,
+                                is_static ? "no-cache" : "no-store") !=
             MHD_YES ||
         MHD_add_response_header(r, "X-Content-Type-Options", "nosniff") !=
             MHD_YES) {
@@ -391,11 +442,10 @@ static enum MHD_Result answer(struct MHD_Connection *conn, unsigned status,
     return ret;
 }
 
-/* A short JSON answer: {"error":"..."} and the like. */
-static enum MHD_Result answer_json(struct MHD_Connection *conn,
-                                   unsigned status, const char *fmt, ...)
+enum MHD_Result wsg_web_json(struct MHD_Connection *conn, unsigned status,
+                             const char *fmt, ...)
 {
-    char buf[WEB_INFO_MAX];
+    char buf[WSG_WEB_ANSWER_MAX];
     va_list ap;
     int n;
 
@@ -404,22 +454,76 @@ static enum MHD_Result answer_json(struct MHD_Connection *conn,
     va_end(ap);
     if (n < 0 || (size_t)n >= sizeof buf)
         return MHD_NO;
-    return answer(conn, status, "application/json", buf, (size_t)n,
-                  MHD_RESPMEM_MUST_COPY, "no-store");
+    return wsg_web_answer(conn, status, "application/json", buf, (size_t)n, 0);
+}
+
+size_t wsg_web_escape(char *buf, size_t cap, const char *s, size_t len)
+{
+    static const char hex[] = "0123456789abcdef";
+    size_t used = 0, i;
+
+    for (i = 0; i < len; i++) {
+        unsigned char c = (unsigned char)s[i];
+        char esc[7];
+        size_t n;
+
+        if (c == '"' || c == '\\') {
+            esc[0] = '\\';
+            esc[1] = (char)c;
+            n = 2;
+        } else if (c < 0x20 || c == 0x7f) {
+            memcpy(esc, "\\u00", 4);
+            esc[4] = hex[c >> 4];
+            esc[5] = hex[c & 15];
+            n = 6;
+        } else {
+            esc[0] = (char)c;
+            n = 1;
+        }
+        if (used + n >= cap) {
+            if (cap)
+                buf[used] = '\0';
+            return cap;
+        }
+        memcpy(buf + used, esc, n);
+        used += n;
+    }
+    if (cap)
+        buf[used] = '\0';
+    return used;
+}
+
+enum MHD_Result wsg_web_error(struct MHD_Connection *conn, unsigned status,
+                              const char *msg)
+{
+    char esc[WSG_WEB_ANSWER_MAX - 16];
+
+    wsg_web_escape(esc, sizeof esc, msg, strlen(msg));
+    return wsg_web_json(conn, status, "{\"error\":\"%s\"}", esc);
 }
 
 static enum MHD_Result refuse_method(struct MHD_Connection *conn,
-                                     const char *allow)
+                                     unsigned methods)
 {
     struct MHD_Response *r;
     enum MHD_Result ret;
     static const char body[] = "{\"error\":\"method not allowed\"}";
+    char allow[40] = "";
 
+    if (methods & WSG_WEB_GET)
+        strcat(allow, ", GET, HEAD");
+    if (methods & WSG_WEB_POST)
+        strcat(allow, ", POST");
+    if (methods & WSG_WEB_PUT)
+        strcat(allow, ", PUT");
+    if (methods & WSG_WEB_DELETE)
+        strcat(allow, ", DELETE");
     r = MHD_create_response_from_buffer(sizeof body - 1, (void *)body,
                                         MHD_RESPMEM_PERSISTENT);
     if (!r)
         return MHD_NO;
-    if (MHD_add_response_header(r, MHD_HTTP_HEADER_ALLOW, allow) != MHD_YES ||
+    if (MHD_add_response_header(r, MHD_HTTP_HEADER_ALLOW, allow + 2) !=
+            MHD_YES ||
         MHD_add_response_header(r, MHD_HTTP_HEADER_CONTENT_TYPE,
                                 "application/json") != MHD_YES) {
         MHD_destroy_response(r);
@@ -430,29 +534,48 @@ static enum MHD_Result refuse_method(struct MHD_Connection *conn,
     return ret;
 }
 
+const char *wsg_web_field(const struct wsg_web_req *req, const char *name)
+{
+    size_t i;
+
+    for (i = 0; i < req->nfields; i++)
+        if (strcmp(req->fields[i].name, name) == 0)
+            return req->fields[i].value;
+    return MHD_lookup_connection_value(req->conn, MHD_GET_ARGUMENT_KIND, name);
+}
+
+void wsg_web_touch(struct wsg_web *web)
+{
+    wsg_sched_touch(web->sched, web->g);
+}
+
+void wsg_web_done(struct wsg_web *web)
+{
+    wsg_sched_check(web->sched, web->g);
+}
+
 /* ---- endpoints ---- */
 
 static enum MHD_Result serve_state(struct wsg_web *web,
-                                   struct MHD_Connection *conn)
+                                   struct wsg_web_req *req)
 {
     char json[WSG_STATE_JSON_MAX];
     size_t len;
 
     /* As the control channel does: the gripper's time brought up to the
      * grid first, its deadline checked after. */
-    wsg_sched_touch(web->sched, web->g);
+    wsg_web_touch(web);
     len =
         wsg_state_format(json, sizeof json, web->g, web->sched, WSG_STATE_ALL);
-    wsg_sched_check(web->sched, web->g);
-    return answer(conn, MHD_HTTP_OK, "application/json", json, len,
-                  MHD_RESPMEM_MUST_COPY, "no-store");
+    wsg_web_done(web);
+    return wsg_web_answer(req->conn, MHD_HTTP_OK, "application/json", json,
+                          len, 0);
 }
 
 /* What the page needs to draw the gripper and name its flags: the
  * stroke, the forces, and every flag's name by bit (null where the
  * manual names none). */
-static enum MHD_Result serve_info(struct wsg_web *web,
-                                  struct MHD_Connection *conn)
+static enum MHD_Result serve_info(struct wsg_web *web, struct wsg_web_req *req)
 {
     const struct wsg_axis_config *cfg =
         wsg_axis_cfg(wsg_device_axis(&web->g->dev));
@@ -488,13 +611,14 @@ static enum MHD_Result serve_info(struct wsg_web *web,
     if (used + 3 > sizeof buf)
         return MHD_NO;
     memcpy(buf + used, "]}", 3);
-    return answer(conn, MHD_HTTP_OK, "application/json", buf, used + 2,
-                  MHD_RESPMEM_MUST_COPY, "no-store");
+    return wsg_web_answer(req->conn, MHD_HTTP_OK, "application/json", buf,
+                          used + 2, 0);
 }
 
 static enum MHD_Result serve_events(struct wsg_web *web,
-                                    struct MHD_Connection *conn)
+                                    struct wsg_web_req *req)
 {
+    struct MHD_Connection *conn = req->conn;
     struct MHD_Response *r;
     struct web_sub *sub;
     enum MHD_Result ret;
@@ -505,8 +629,8 @@ static enum MHD_Result serve_events(struct wsg_web *web,
     sub->web = web;
     sub->conn = conn;
     sub->hup.fd = -1;
-    r = MHD_create_response_from_callback(MHD_SIZE_UNKNOWN, WEB_EVENT_MAX,
-                                          sub_read, sub, sub_free);
+    r = MHD_create_response_from_callback(
+        MHD_SIZE_UNKNOWN, WSG_WEB_LOG_EVENT_MAX, sub_read, sub, sub_free);
     if (!r) {
         free(sub);
         return MHD_NO;
@@ -515,7 +639,13 @@ static enum MHD_Result serve_events(struct wsg_web *web,
     if (web->subs)
         web->subs->prev = sub;
     web->subs = sub;
-    web->nsubs++;
+    if (web->nsubs++ == 0)
+        wsg_web_world_watch(web, 1);
+    /* The log as far back as it is kept: a page reloaded shows what
+     * happened before. */
+    sub->log_off = web->log_head > WSG_WEB_LOG_RING
+                       ? web->log_head - WSG_WEB_LOG_RING
+                       : 0;
     /* From here on sub_free, run when r goes, unlinks it. */
     if (MHD_add_response_header(r, MHD_HTTP_HEADER_CONTENT_TYPE,
                                 "text/event-stream") != MHD_YES ||
@@ -539,37 +669,116 @@ static enum MHD_Result serve_events(struct wsg_web *web,
  * a state read after it shows the effect. They are not commands of an
  * interface: the last command's failure flag (D12) is the interfaces'. */
 static enum MHD_Result serve_action(struct wsg_web *web,
-                                    struct MHD_Connection *conn, int ack)
+                                    struct wsg_web_req *req, int ack)
 {
     struct wsg_axis *ax = wsg_device_axis(&web->g->dev);
 
-    wsg_sched_touch(web->sched, web->g);
+    wsg_web_touch(web);
     if (ack)
         wsg_axis_request_ack(ax);
     else
         wsg_axis_request_stop(ax);
     wsg_axis_settle(ax);
-    wsg_sched_check(web->sched, web->g);
-    return answer_json(conn, MHD_HTTP_OK, "{\"status\":\"%s\"}",
-                       wsg_status_name(WSG_E_SUCCESS));
+    wsg_web_done(web);
+    return wsg_web_json(req->conn, MHD_HTTP_OK, "{\"status\":\"%s\"}",
+                        wsg_status_name(WSG_E_SUCCESS));
 }
 
-static const struct wsg_web_asset *find_asset(const char *url)
+static enum MHD_Result serve_stop(struct wsg_web *web, struct wsg_web_req *req)
+{
+    return serve_action(web, req, 0);
+}
+
+static enum MHD_Result serve_ack(struct wsg_web *web, struct wsg_web_req *req)
+{
+    return serve_action(web, req, 1);
+}
+
+/* The page's files: "/" is index.html. */
+static enum MHD_Result serve_asset(struct wsg_web *web,
+                                   struct wsg_web_req *req)
 {
     const struct wsg_web_asset *a;
+    const char *url = strcmp(req->url, "/") == 0 ? "/index.html" : req->url;
 
-    if (strcmp(url, "/") == 0)
-        url = "/index.html";
+    (void)web;
     for (a = wsg_web_assets; a->path; a++)
         if (strcmp(a->path, url) == 0)
-            return a;
-    return NULL;
+            return wsg_web_answer(req->conn, MHD_HTTP_OK, a->type, a->data,
+                                  a->len, 1);
+    return wsg_web_error(req->conn, MHD_HTTP_NOT_FOUND, "not found");
 }
 
-/* A POST from another site's page (its Origin is not this server) is
- * refused: a page anywhere must not stop the gripper through the
- * browser of someone who has this one open. Clients that are not
- * browsers send no Origin. */
+/* Every URL the server answers; the first match wins, and what no other
+ * entry names is one of the page's files (the last entry). */
+static const struct wsg_web_route routes[] = {
+    {.path = "/state.json", .methods = WSG_WEB_GET, .serve = serve_state},
+    {.path = "/info.json", .methods = WSG_WEB_GET, .serve = serve_info},
+    {.path = "/events", .methods = WSG_WEB_GET, .serve = serve_events},
+    {.path = "/stop", .methods = WSG_WEB_POST, .serve = serve_stop},
+    {.path = "/ack", .methods = WSG_WEB_POST, .serve = serve_ack},
+    {.path = "/motion.json",
+     .methods = WSG_WEB_POST,
+     .serve = wsg_web_serve_motion_form},
+    {.path = "/graspconf.json",
+     .methods = WSG_WEB_POST,
+     .serve = wsg_web_serve_graspconf},
+    {.path = "/motion",
+     .methods = WSG_WEB_POST,
+     .serve = wsg_web_serve_motion},
+    {.path = "/settings.json",
+     .methods = WSG_WEB_GET | WSG_WEB_POST,
+     .serve = wsg_web_serve_settings},
+    {.path = "/scripts.json",
+     .methods = WSG_WEB_GET,
+     .serve = wsg_web_serve_scripts},
+    {.path = "/scripts/",
+     .methods = WSG_WEB_GET | WSG_WEB_PUT | WSG_WEB_DELETE,
+     .body_max = WSG_WEB_UPLOAD_MAX,
+     .serve = wsg_web_serve_script_file},
+    {.path = "/script/",
+     .methods = WSG_WEB_POST,
+     .serve = wsg_web_serve_script_run},
+    {.path = "/control",
+     .methods = WSG_WEB_POST,
+     .serve = wsg_web_serve_control},
+    {.path = "/", .methods = WSG_WEB_GET, .serve = serve_asset},
+};
+
+static const struct wsg_web_route *find_route(const char *url,
+                                              const char **tail)
+{
+    size_t i, n;
+
+    for (i = 0; i < sizeof routes / sizeof routes[0]; i++) {
+        n = strlen(routes[i].path);
+        if (routes[i].path[n - 1] == '/' ? strncmp(url, routes[i].path, n) == 0
+                                         : strcmp(url, routes[i].path) == 0) {
+            *tail = url + n;
+            return &routes[i];
+        }
+    }
+    return NULL; /* cannot happen: "/" takes every path */
+}
+
+static enum wsg_web_method method_of(const char *m)
+{
+    if (strcmp(m, MHD_HTTP_METHOD_GET) == 0 ||
+        strcmp(m, MHD_HTTP_METHOD_HEAD) == 0)
+        return WSG_WEB_GET;
+    if (strcmp(m, MHD_HTTP_METHOD_POST) == 0)
+        return WSG_WEB_POST;
+    if (strcmp(m, MHD_HTTP_METHOD_PUT) == 0)
+        return WSG_WEB_PUT;
+    if (strcmp(m, MHD_HTTP_METHOD_DELETE) == 0)
+        return WSG_WEB_DELETE;
+    return 0;
+}
+
+/* A request that changes something from another site's page (its Origin
+ * is not this server) is refused: a page anywhere must not stop the
+ * gripper through the browser of someone who has this one open. Clients
+ * that are not browsers send no Origin. */
 static int foreign_origin(struct MHD_Connection *conn)
 {
     const char *origin, *host;
@@ -584,90 +793,212 @@ static int foreign_origin(struct MHD_Connection *conn)
            strcmp(origin + 7, host) != 0;
 }
 
-static enum MHD_Result route(struct wsg_web *web, struct MHD_Connection *conn,
-                             const char *url, const char *method)
+/* Served on loopback, only a loopback name in the Host header is taken:
+ * a name of another site that resolves to 127.0.0.1 (DNS rebinding)
+ * would otherwise let that site's pages read and drive the gripper. */
+static int foreign_host(const struct wsg_web *web, struct MHD_Connection *conn)
 {
-    int get = strcmp(method, MHD_HTTP_METHOD_GET) == 0 ||
-              strcmp(method, MHD_HTTP_METHOD_HEAD) == 0;
-    int post = strcmp(method, MHD_HTTP_METHOD_POST) == 0;
-    const struct wsg_web_asset *a;
+    static const char *const names[] = {"localhost", "127.", "[::1]",
+                                        "[::ffff:127."};
+    const char *host;
+    size_t i, n;
 
-    if (strcmp(url, "/state.json") == 0)
-        return get ? serve_state(web, conn) : refuse_method(conn, "GET, HEAD");
-    if (strcmp(url, "/info.json") == 0)
-        return get ? serve_info(web, conn) : refuse_method(conn, "GET, HEAD");
-    if (strcmp(url, "/events") == 0)
-        return strcmp(method, MHD_HTTP_METHOD_GET) == 0
-                   ? serve_events(web, conn)
-                   : refuse_method(conn, "GET");
-    if (strcmp(url, "/stop") == 0 || strcmp(url, "/ack") == 0) {
-        if (!post)
-            return refuse_method(conn, "POST");
-        if (foreign_origin(conn))
-            return answer_json(conn, MHD_HTTP_FORBIDDEN,
-                               "{\"error\":\"foreign origin\"}");
-        return serve_action(web, conn, url[1] == 'a');
+    if (!web->loopback)
+        return 0;
+    host = MHD_lookup_connection_value(conn, MHD_HEADER_KIND,
+                                       MHD_HTTP_HEADER_HOST);
+    if (!host)
+        return 0; /* HTTP/1.0: MHD takes it; no browser sends it */
+    for (i = 0; i < sizeof names / sizeof names[0]; i++) {
+        n = strlen(names[i]);
+        if (strncmp(host, names[i], n) != 0)
+            continue;
+        /* "localhost" and "[::1]" end there or at their port. */
+        if (names[i][n - 1] == '.' || host[n] == '\0' || host[n] == ':')
+            return 0;
     }
-    a = find_asset(url);
-    if (a)
-        return get ? answer(conn, MHD_HTTP_OK, a->type, a->data, a->len,
-                            MHD_RESPMEM_PERSISTENT, "no-cache")
-                   : refuse_method(conn, "GET, HEAD");
-    return answer_json(conn, MHD_HTTP_NOT_FOUND, "{\"error\":\"not found\"}");
+    return 1;
+}
+
+/* A form's fields, as MHD's post processor decodes them. */
+static enum MHD_Result on_field(void *cls, enum MHD_ValueKind kind,
+                                const char *key, const char *filename,
+                                const char *type, const char *encoding,
+                                const char *data, uint64_t off, size_t size)
+{
+    struct wsg_web_req *req = cls;
+    struct wsg_web_field *f;
+
+    (void)kind;
+    (void)filename;
+    (void)type;
+    (void)encoding;
+    /* A value may come in pieces: the next piece of the last field. */
+    if (off > 0 && req->nfields &&
+        strcmp(req->fields[req->nfields - 1].name, key) == 0)
+        f = &req->fields[req->nfields - 1];
+    else if (req->nfields < WSG_WEB_FIELDS_MAX &&
+             strlen(key) < WSG_WEB_NAME_MAX)
+        f = &req->fields[req->nfields++];
+    else {
+        req->overfull = 1;
+        return MHD_YES;
+    }
+    if (off == 0)
+        strcpy(f->name, key);
+    if (off + size >= WSG_WEB_VALUE_MAX) {
+        req->overfull = 1;
+        return MHD_YES;
+    }
+    memcpy(f->value + off, data, size);
+    f->value[off + size] = '\0';
+    return MHD_YES;
+}
+
+/* Decode a form body into req's fields; other bodies stay as they are. */
+static void parse_form(struct wsg_web_req *req)
+{
+    struct MHD_PostProcessor *pp;
+    const char *type;
+
+    type = MHD_lookup_connection_value(req->conn, MHD_HEADER_KIND,
+                                       MHD_HTTP_HEADER_CONTENT_TYPE);
+    if (!type ||
+        strncasecmp(type, MHD_HTTP_POST_ENCODING_FORM_URLENCODED,
+                    strlen(MHD_HTTP_POST_ENCODING_FORM_URLENCODED)) != 0)
+        return;
+    pp = MHD_create_post_processor(req->conn, 1024, on_field, req);
+    if (!pp) {
+        req->overfull = 1;
+        return;
+    }
+    if (req->body_len)
+        MHD_post_process(pp, req->body, req->body_len);
+    MHD_destroy_post_processor(pp);
+}
+
+static enum MHD_Result too_large(struct wsg_web_req *req)
+{
+    char msg[64];
+
+    req->refused = 1;
+    snprintf(msg, sizeof msg, "body larger than %zu bytes",
+             req->route->body_max ? req->route->body_max : WSG_WEB_BODY_MAX);
+    return wsg_web_error(req->conn, MHD_HTTP_CONTENT_TOO_LARGE, msg);
+}
+
+/* The first call for a request (its headers): find its route and refuse
+ * what it must not do before any of its body is read. */
+static enum MHD_Result on_headers(struct wsg_web *web, struct wsg_web_req *req)
+{
+    const char *clen;
+    size_t max;
+
+    if (foreign_host(web, req->conn)) {
+        req->refused = 1;
+        return wsg_web_error(req->conn, MHD_HTTP_MISDIRECTED_REQUEST,
+                             "this server answers to its loopback address "
+                             "only");
+    }
+    if (!(req->route->methods & req->method)) {
+        req->refused = 1;
+        return refuse_method(req->conn, req->route->methods);
+    }
+    if (req->method != WSG_WEB_GET && foreign_origin(req->conn)) {
+        req->refused = 1;
+        return wsg_web_error(req->conn, MHD_HTTP_FORBIDDEN, "foreign origin");
+    }
+    max = req->route->body_max ? req->route->body_max : WSG_WEB_BODY_MAX;
+    clen = MHD_lookup_connection_value(req->conn, MHD_HEADER_KIND,
+                                       MHD_HTTP_HEADER_CONTENT_LENGTH);
+    if (clen && strtoull(clen, NULL, 10) > max)
+        return too_large(req);
+    return MHD_YES;
+}
+
+/* A piece of the body, kept (up to the route's cap). */
+static enum MHD_Result on_body(struct wsg_web_req *req, const char *data,
+                               size_t n)
+{
+    size_t max =
+        req->route->body_max ? req->route->body_max : WSG_WEB_BODY_MAX;
+    char *p;
+
+    if (req->refused)
+        return MHD_YES; /* the rest of a refused body: dropped */
+    if (req->body_len + n > max)
+        return too_large(req);
+    if (req->body_len + n + 1 > req->body_cap) {
+        size_t cap = req->body_cap ? req->body_cap * 2 : 1024;
+
+        while (cap < req->body_len + n + 1)
+            cap *= 2;
+        p = realloc(req->body, cap);
+        if (!p)
+            return MHD_NO;
+        req->body = p;
+        req->body_cap = cap;
+    }
+    memcpy(req->body + req->body_len, data, n);
+    req->body_len += n;
+    req->body[req->body_len] = '\0';
+    return MHD_YES;
 }
 
 /* MHD calls this once with the headers, then with each piece of the body,
- * then once more with none: the request is answered then. A body longer
- * than WSG_WEB_BODY_MAX is refused as soon as that is known. */
+ * then once more with none: the request is answered then. */
 static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn,
                                   const char *url, const char *method,
                                   const char *version, const char *upload,
                                   size_t *upload_size, void **req_cls)
 {
     struct wsg_web *web = cls;
-    struct web_req *req = *req_cls;
-    const char *clen;
+    struct wsg_web_req *req = *req_cls;
+    size_t n;
 
     (void)version;
-    (void)upload;
     if (!req) {
         req = calloc(1, sizeof *req);
         if (!req)
             return MHD_NO;
         *req_cls = req;
-        clen = MHD_lookup_connection_value(conn, MHD_HEADER_KIND,
-                                           MHD_HTTP_HEADER_CONTENT_LENGTH);
-        if (clen && strtoull(clen, NULL, 10) > WSG_WEB_BODY_MAX) {
-            req->refused = 1;
-            return answer_json(conn, MHD_HTTP_CONTENT_TOO_LARGE,
-                               "{\"error\":\"body larger than %u bytes\"}",
-                               WSG_WEB_BODY_MAX);
-        }
-        return MHD_YES;
+        req->conn = conn;
+        req->url = url;
+        req->method = method_of(method);
+        req->route = find_route(url, &req->tail);
+        return on_headers(web, req);
     }
     if (*upload_size) {
-        req->body += *upload_size;
+        n = *upload_size;
         *upload_size = 0;
-        if (req->body > WSG_WEB_BODY_MAX && !req->refused) {
-            req->refused = 1;
-            return answer_json(conn, MHD_HTTP_CONTENT_TOO_LARGE,
-                               "{\"error\":\"body larger than %u bytes\"}",
-                               WSG_WEB_BODY_MAX);
-        }
-        return MHD_YES;
+        return on_body(req, upload, n);
     }
     if (req->refused)
         return MHD_YES;
-    return route(web, conn, url, method);
+    if (!req->body) {
+        /* An empty body still reads as "". */
+        req->body = calloc(1, 1);
+        if (!req->body)
+            return MHD_NO;
+    }
+    parse_form(req);
+    if (req->overfull)
+        return wsg_web_error(conn, MHD_HTTP_BAD_REQUEST,
+                             "too many form fields, or one too long");
+    return req->route->serve(web, req);
 }
 
 static void on_completed(void *cls, struct MHD_Connection *conn,
                          void **req_cls, enum MHD_RequestTerminationCode why)
 {
+    struct wsg_web_req *req = *req_cls;
+
     (void)cls;
     (void)conn;
     (void)why;
-    free(*req_cls);
+    if (req)
+        free(req->body);
+    free(req);
     *req_cls = NULL;
 }
 
@@ -725,13 +1056,15 @@ void wsg_web_close(struct wsg_web *web)
         wsg_reactor_del(web->reactor, &web->timer);
         close(web->timer.fd);
     }
+    wsg_web_world_close(web);
     free(web);
 }
 
-int wsg_web_open(struct wsg_web **out, struct wsg_reactor *reactor,
-                 struct wsg_sched *sched, const struct wsg_endpoint *ep,
-                 char *err, size_t errlen)
+int wsg_web_open(struct wsg_web **out, struct wsg_daemon *d, char *err,
+                 size_t errlen)
 {
+    struct wsg_reactor *reactor = &d->reactor;
+    const struct wsg_endpoint *ep = &d->opt.web;
     const union MHD_DaemonInfo *info;
     struct wsg_web *web;
     int fd = -1, mine, r;
@@ -743,11 +1076,18 @@ int wsg_web_open(struct wsg_web **out, struct wsg_reactor *reactor,
                  strerror(ENOMEM));
         return -ENOMEM;
     }
+    web->d = d;
     web->reactor = reactor;
-    web->sched = sched;
-    web->g = &sched->grippers[0];
+    web->sched = &d->sched;
+    web->g = &d->sched.grippers[0];
     web->mhd_watch.fd = -1;
     web->timer.fd = -1;
+    web->loopback = ep->addr[0] == 127;
+    r = wsg_web_world_open(web);
+    if (r < 0) {
+        snprintf(err, errlen, "cannot serve the web page: %s", strerror(-r));
+        goto fail;
+    }
     fd = wsg_transport_listen_tcp(ep, (int)WSG_WEB_CLIENTS_MAX, "web",
                                   web->local, sizeof web->local, err, errlen);
     if (fd < 0) {
