@@ -1,15 +1,60 @@
 /*
  * The web page's life: what the gripper is (/info.json) once, then its
- * state as the server pushes it (/events, a "state" event whenever it
- * changes, none while it does not), drawn as it comes: the fingers and the
- * part, the readings, the flags, the plot. Nothing here polls or runs on a
- * timer, so a page left open on an idle gripper costs nothing. STOP and
- * ACK post to /stop and /ack.
+ * state and its communication log as the server pushes them (/events: a
+ * "state" event whenever the state changes, "log" events with new log
+ * lines, none while nothing happens), drawn as they come. Nothing here
+ * polls or runs on a timer, so a page left open on an idle gripper costs
+ * nothing.
+ *
+ * This file runs the sidebar (flags, grasping state, STOP and ACK), the
+ * tabs and the Diagnostics tab. The other tabs' scripts (settings.js,
+ * scripts.js, motion.js) build their own panel and use window.wsg:
+ *   wsg.on('state' | 'log' | 'info', fn)  fn(state) / fn(lines) / fn(info)
+ *   wsg.state, wsg.info                   the newest of each (or null)
+ *   wsg.post(path, fields)                a form POST: {ok, status, body}
+ *   wsg.el(tag, props, ...children)       a DOM element
  */
 'use strict';
 
+window.wsg = (function () {
+  const handlers = { state: [], log: [], info: [] };
+  const api = {
+    state: null,
+    info: null,
+    on(type, fn) {
+      handlers[type].push(fn);
+      /* A late subscriber gets what is known already. */
+      if (type === 'state' && api.state)
+        fn(api.state);
+      if (type === 'info' && api.info)
+        fn(api.info);
+    },
+    emit(type, value) {
+      handlers[type].forEach((fn) => fn(value));
+    },
+    /* fields: an object or URLSearchParams, sent url-encoded (the forms
+     * the real gripper's page posts). The answer's JSON in body. */
+    post(path, fields) {
+      const body = new URLSearchParams(fields || {});
+      return fetch(path, { method: 'POST', body })
+        .then((r) => r.json().catch(() => ({})).then((j) => ({
+          ok: r.ok, status: r.status, body: j })))
+        .catch((e) => ({ ok: false, status: 0,
+          body: { error: String(e) } }));
+    },
+    el(tag, props, ...children) {
+      const e = document.createElement(tag);
+      Object.assign(e, props || {});
+      children.forEach((c) => e.append(c));
+      return e;
+    }
+  };
+  return api;
+})();
+
 (function () {
   const WINDOW_MS = 10000; /* the plot's span */
+  const LOG_LINES = 1000; /* the log view keeps the newest */
   /* Flags that mean something is wrong: drawn red when set. */
   const ALARMS = new Set(['fast_stop', 'temp_warning', 'temp_fault',
     'power_fault', 'curr_fault', 'finger_fault', 'cmd_failure',
@@ -75,6 +120,16 @@
       part.classList.toggle('held', s.grasp_state_name === 'holding');
     } else {
       part.setAttribute('visibility', 'hidden');
+    }
+    /* An obstacle blocks both fingers at its width: drawn at each. */
+    const ob = $('obstacle');
+    if (typeof s.obstacle === 'number') {
+      const half = Math.max(0, Math.min(s.obstacle, stroke)) * px / 2;
+      ob.setAttribute('x', (mid - half - 2).toFixed(1));
+      ob.setAttribute('width', (2 * half + 4).toFixed(1));
+      ob.setAttribute('visibility', 'visible');
+    } else {
+      ob.setAttribute('visibility', 'hidden');
     }
   }
 
@@ -150,22 +205,107 @@
 
   function show(s) {
     last = s;
+    wsg.state = s;
     showGripper(s);
     showReadings(s);
     if (info)
       showFlags(s);
     record(s);
     drawPlot();
+    wsg.emit('state', s);
   }
 
+  /* The sidebar's buttons. */
   function act(path) {
     const out = $('result');
-    fetch(path, { method: 'POST' })
-      .then((r) => r.json())
-      .then((j) => { out.textContent = path.slice(1).toUpperCase() + ': ' +
-        (j.status || j.error); })
-      .catch((e) => { out.textContent = String(e); });
+    wsg.post(path).then((a) => {
+      out.textContent = path.slice(1).toUpperCase() + ': ' +
+        (a.body.status || a.body.error);
+    });
   }
+
+  /* ---- tabs: the one named in the URL's fragment (#settings) ---- */
+  function showTab() {
+    const name = (location.hash || '#diagnostics').slice(1);
+    const known = document.getElementById('tab-' + name) ? name
+      : 'diagnostics';
+    document.querySelectorAll('.tab').forEach((t) => {
+      t.hidden = t.id !== 'tab-' + known;
+    });
+    document.querySelectorAll('.tabs button').forEach((b) => {
+      b.setAttribute('aria-selected', String(b.dataset.tab === known));
+    });
+    if (known === 'diagnostics')
+      drawPlot();
+  }
+  document.querySelectorAll('.tabs button').forEach((b) => {
+    b.addEventListener('click', () => { location.hash = b.dataset.tab; });
+  });
+  window.addEventListener('hashchange', showTab);
+  showTab();
+
+  /* ---- the communication log ---- */
+  const logView = $('log');
+  let logLines = [];
+
+  function shown(line) {
+    const f = $('log-filter').value;
+    return !f || line.includes(f);
+  }
+
+  function renderLog() {
+    logView.textContent = logLines.filter(shown).join('\n');
+    if ($('log-follow').checked)
+      logView.scrollTop = logView.scrollHeight;
+  }
+
+  function addLog(lines) {
+    logLines = logLines.concat(lines);
+    if (logLines.length > LOG_LINES)
+      logLines = logLines.slice(logLines.length - LOG_LINES);
+    const add = lines.filter(shown);
+    /* Appending is cheaper than redrawing while the view is not cut. */
+    if (add.length && logLines.length < LOG_LINES)
+      logView.append((logView.textContent ? '\n' : '') + add.join('\n'));
+    else if (add.length)
+      renderLog();
+    if ($('log-follow').checked)
+      logView.scrollTop = logView.scrollHeight;
+  }
+  $('log-filter').addEventListener('input', renderLog);
+  $('log-clear').addEventListener('click', () => {
+    logLines = [];
+    renderLog();
+  });
+
+  /* ---- the scenario: the control channel's commands ---- */
+  function control(line) {
+    const out = $('scenario-answer');
+    return wsg.post('/control', { line }).then((a) => {
+      out.textContent = '> ' + line + '\n' + (a.body.answer || a.body.error);
+      out.classList.toggle('bad', !a.ok);
+      return a;
+    });
+  }
+  const val = (id) => $(id).value.trim();
+  const click = (id, fn) => $(id).addEventListener('click', fn);
+  click('part-place', () => control('part ' + val('part-width') + ' ' +
+    val('part-stiffness')));
+  click('part-remove', () => control('part none'));
+  click('obstacle-place', () => control('obstacle ' + val('obstacle-width')));
+  click('obstacle-remove', () => control('obstacle none'));
+  click('fault-on', () => control('fault ' + val('fault-name') + ' on'));
+  click('fault-off', () => control('fault ' + val('fault-name') + ' off'));
+  click('time-pause', () => control('time pause'));
+  click('time-resume', () => control('time resume'));
+  click('time-step', () => control('time step ' + val('time-ms')));
+  $('scenario').addEventListener('submit', (ev) => {
+    ev.preventDefault();
+    const line = val('control-line');
+    if (line)
+      control(line);
+  });
+  wsg.control = control;
 
   $('window').textContent = String(WINDOW_MS / 1000);
   $('stop').addEventListener('click', () => act('/stop'));
@@ -175,15 +315,24 @@
     .then((r) => r.json())
     .then((i) => {
       info = i;
+      wsg.info = i;
       $('title').textContent = 'WSG ' + i.stroke + ' mm, SN ' + i.serial;
+      $('version').textContent = 'Firmware ' + i.firmware + ', wsgemu ' +
+        i.emulator + '.';
       buildFlags();
       if (last)
         show(last);
+      wsg.emit('info', i);
     })
     .catch(() => {});
 
   const events = new EventSource('/events');
   events.addEventListener('state', (ev) => show(JSON.parse(ev.data)));
+  events.addEventListener('log', (ev) => {
+    const lines = ev.data.split('\n');
+    addLog(lines);
+    wsg.emit('log', lines);
+  });
   events.addEventListener('open', () => {
     $('link').textContent = 'live';
     $('link').className = 'link up';

@@ -256,6 +256,8 @@ void wsg_axis_set_part(struct wsg_axis *ax, double width, double stiffness);
 /* A rigid obstacle that blocks the fingers at width, moving either way;
  * width < 0 removes it. */
 void wsg_axis_set_obstacle(struct wsg_axis *ax, double width);
+/* The obstacle's width: 1, or 0 when there is none. */
+int wsg_axis_obstacle(const struct wsg_axis *ax, double *width);
 /* Inject or clear faults (WSG_FAULTS bits). A temperature, power or
  * current fault stops a running motion (E_CMD_ABORTED) at the next settle
  * or step. */

@@ -1149,6 +1149,14 @@ int wsg_axis_part(const struct wsg_axis *ax, double *width, double *stiffness)
     return 1;
 }
 
+int wsg_axis_obstacle(const struct wsg_axis *ax, double *width)
+{
+    if (!ax->obstacle)
+        return 0;
+    *width = ax->obstacle_width;
+    return 1;
+}
+
 /* A request answered E_CMD_PENDING; the next step starts it. */
 static uint16_t wsg_axis_request(struct wsg_axis *ax, enum wsg_motion_kind k,
                                  uint8_t id, double target, double speed,

@@ -88,11 +88,16 @@ size_t wsg_state_format(char *buf, size_t cap, const struct wsg_gripper *g,
         s->paused ? "true" : "false", s->scale,
         (unsigned long)wsg_gripper_delayed(g),
         (unsigned long long)wsg_gripper_delay_dropped(g));
-    /* The world's part too: the web page draws it between the fingers. */
+    /* The world's part and obstacle too: the web page draws them
+     * between the fingers. */
     if (wsg_axis_part(ax, &part_width, &stiffness))
-        append(buf, cap, &used, "\"part\":{\"width\":%.3f,\"stiffness\":%g}}",
+        append(buf, cap, &used, "\"part\":{\"width\":%.3f,\"stiffness\":%g},",
                part_width, stiffness);
     else
-        append(buf, cap, &used, "\"part\":null}");
+        append(buf, cap, &used, "\"part\":null,");
+    if (wsg_axis_obstacle(ax, &part_width))
+        append(buf, cap, &used, "\"obstacle\":%.3f}", part_width);
+    else
+        append(buf, cap, &used, "\"obstacle\":null}");
     return used;
 }

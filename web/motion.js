@@ -1,0 +1,2 @@
+/* The motion tab (filled in by its own change). */
+'use strict';

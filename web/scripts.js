@@ -1,0 +1,2 @@
+/* The scripts tab (filled in by its own change). */
+'use strict';

@@ -1,0 +1,2 @@
+/* The settings tab (filled in by its own change). */
+'use strict';
