@@ -24,6 +24,10 @@ pkgs="$pkgs podman runc iproute2"
 # The Python client's tests (tests/python/run.sh): Debian's python3 makes a
 # venv that sees the system pytest, and pip installs python/ into it offline.
 pkgs="$pkgs python3 python3-venv python3-pytest"
+# The web page's browser tests (tests/browser/run.sh): Debian's Chromium,
+# headless, driven through WebDriver by chromium-driver and Debian's
+# python3-selenium.
+pkgs="$pkgs chromium chromium-driver python3-selenium"
 # The libFuzzer harnesses (tests/fuzz, the fuzz build of scripts/test.sh):
 # clang, and its fuzzer and sanitizer runtime, which clang only recommends.
 # The runtime's package carries clang's major version: the clang-N that the

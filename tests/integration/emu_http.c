@@ -180,9 +180,14 @@ int http_request(const char *addr, const char *method, const char *path,
     int fd, n, eof = 0;
 
     memset(a, 0, sizeof *a);
-    n = snprintf(req, sizeof req,
-                 "%s %s HTTP/1.1\r\nHost: %s\r\nConnection: close\r\n%s",
-                 method, path, addr, headers ? headers : "");
+    /* headers may name the Host themselves (a test of the Host check). */
+    n = snprintf(
+        req, sizeof req, "%s %s HTTP/1.1\r\n%s%s%sConnection: close\r\n%s",
+        method, path,
+        headers && strncasecmp(headers, "Host:", 5) == 0 ? "" : "Host: ",
+        headers && strncasecmp(headers, "Host:", 5) == 0 ? "" : addr,
+        headers && strncasecmp(headers, "Host:", 5) == 0 ? "" : "\r\n",
+        headers ? headers : "");
     if (body)
         n += snprintf(req + n, sizeof req - (size_t)n,
                       "Content-Length: %zu\r\n", strlen(body));
@@ -244,7 +249,14 @@ int http_request(const char *addr, const char *method, const char *path,
 int http_stream_open(struct http_stream *s, const char *addr, const char *path,
                      int timeout_ms)
 {
-    char req[512];
+    return http_stream_open_with(s, addr, path, NULL, timeout_ms);
+}
+
+int http_stream_open_with(struct http_stream *s, const char *addr,
+                          const char *path, const char *headers,
+                          int timeout_ms)
+{
+    char req[1024];
     double deadline = emu_now_ms() + timeout_ms;
     char *he;
     int n;
@@ -253,8 +265,8 @@ int http_stream_open(struct http_stream *s, const char *addr, const char *path,
     s->fd = -1;
     n = snprintf(req, sizeof req,
                  "GET %s HTTP/1.1\r\nHost: %s\r\nAccept: text/event-stream\r\n"
-                 "\r\n",
-                 path, addr);
+                 "%s\r\n",
+                 path, addr, headers ? headers : "");
     s->fd = http_connect(addr);
     if (s->fd < 0)
         return -1;
@@ -338,6 +350,7 @@ int http_stream_event(struct http_stream *s, char *name, size_t name_cap,
     double deadline = emu_now_ms() + timeout_ms;
 
     for (;;) {
+        char id[32];
         char *end;
         long r;
 
@@ -350,6 +363,11 @@ int http_stream_event(struct http_stream *s, char *name, size_t name_cap,
 
             event_field(s->text, len, "event", name, name_cap);
             event_field(s->text, len, "data", data, data_cap);
+            /* An event without an id keeps the last one (as browsers
+             * do). */
+            event_field(s->text, len, "id", id, sizeof id);
+            if (id[0])
+                memcpy(s->id, id, sizeof id);
             memmove(s->text, end + 2, s->text_len - len - 2);
             s->text_len -= len + 2;
             return 1;
@@ -372,4 +390,67 @@ void http_stream_close(struct http_stream *s)
     if (s->fd >= 0)
         close(s->fd);
     s->fd = -1;
+}
+
+int http_load(const char *addr, const char *path, int n, int timeout_ms)
+{
+    double deadline = emu_now_ms() + timeout_ms;
+    struct pollfd *pfd = calloc((size_t)n, sizeof *pfd);
+    char(*head)[16] = calloc((size_t)n, sizeof *head);
+    size_t *got = calloc((size_t)n, sizeof *got);
+    char req[512], buf[4096];
+    int i, open = 0, ok = 0, len;
+
+    if (!pfd || !head || !got)
+        goto out;
+    for (i = 0; i < n; i++)
+        pfd[i].fd = -1;
+    len = snprintf(req, sizeof req,
+                   "GET %s HTTP/1.1\r\nHost: %s\r\nConnection: close\r\n\r\n",
+                   path, addr);
+    /* Every connection open and its request sent before any answer is
+     * read: n requests in the server's hands at once. */
+    for (i = 0; i < n; i++) {
+        pfd[i].fd = http_connect(addr);
+        pfd[i].events = POLLIN;
+        if (pfd[i].fd < 0 || send_all(pfd[i].fd, req, (size_t)len) < 0)
+            goto out;
+        open++;
+    }
+    while (open > 0 && emu_now_ms() < deadline) {
+        int r = poll(pfd, (nfds_t)n, (int)(deadline - emu_now_ms()) + 1);
+
+        if (r < 0 && errno != EINTR)
+            break;
+        for (i = 0; r > 0 && i < n; i++) {
+            ssize_t k;
+
+            if (pfd[i].fd < 0 || !pfd[i].revents)
+                continue;
+            k = read(pfd[i].fd, buf, sizeof buf);
+            if (k > 0 && got[i] < sizeof head[i] - 1) {
+                size_t take = sizeof head[i] - 1 - got[i];
+
+                memcpy(head[i] + got[i], buf,
+                       (size_t)k < take ? (size_t)k : take);
+                got[i] += (size_t)k < take ? (size_t)k : take;
+            }
+            if (k > 0)
+                continue;
+            /* The answer is whole: the server closed. */
+            if (strncmp(head[i], "HTTP/1.1 200 ", 13) == 0)
+                ok++;
+            close(pfd[i].fd);
+            pfd[i].fd = -1;
+            open--;
+        }
+    }
+out:
+    for (i = 0; pfd && i < n; i++)
+        if (pfd[i].fd >= 0)
+            close(pfd[i].fd);
+    free(pfd);
+    free(head);
+    free(got);
+    return ok;
 }

@@ -43,16 +43,25 @@ struct http_stream {
     char text[HTTP_BODY_MAX]; /* decoded, not yet taken as events */
     size_t text_len;
     int eof;
+    char id[32]; /* the last event id seen ("" none) */
 };
 
 /* Open GET path and read the answer's head. 0 (s->status set), or -1. */
 int http_stream_open(struct http_stream *s, const char *addr, const char *path,
                      int timeout_ms);
+/* The same with extra header lines ("Name: value\r\n" each). */
+int http_stream_open_with(struct http_stream *s, const char *addr,
+                          const char *path, const char *headers,
+                          int timeout_ms);
 /* The next whole event: its "event:" name into name and its "data:" into
  * data (both NUL-terminated, cut to fit). 1: one, 0: none within
  * timeout_ms, -1: the stream ended or failed. */
 int http_stream_event(struct http_stream *s, char *name, size_t name_cap,
                       char *data, size_t data_cap, int timeout_ms);
 void http_stream_close(struct http_stream *s);
+
+/* n connections to addr at once, each with a GET path sent before any
+ * answer is read; how many were answered 200 within timeout_ms. */
+int http_load(const char *addr, const char *path, int n, int timeout_ms);
 
 #endif

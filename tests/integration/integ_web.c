@@ -47,6 +47,9 @@ static const char *const args[] = {"--tcp",       "127.0.0.1:0", "--control",
                                    "127.0.0.1:0", "--web",       "127.0.0.1:0",
                                    NULL};
 
+/* A form body's header. */
+#define FORM "Content-Type: application/x-www-form-urlencoded\r\n"
+
 static char web[64]; /* the web= field */
 static struct http_answer ans;
 
@@ -285,6 +288,128 @@ static void test_stop_ack(struct emu_client *c, struct ctl *k,
     CHECK(!has_flag(data, "fast_stop"));
 }
 
+/* The next "log" event's lines within timeout_ms (state events passed
+ * over): 1, or 0 none. */
+static int next_log(struct http_stream *s, char *data, int timeout_ms)
+{
+    char name[64];
+    double end = emu_now_ms() + timeout_ms, left;
+    int r;
+
+    for (;;) {
+        left = end - emu_now_ms();
+        r = http_stream_event(s, name, sizeof name, data, EV_MAX,
+                              left > 0 ? (int)left : 0);
+        if (r != 1)
+            return 0;
+        if (strcmp(name, "log") == 0)
+            return 1;
+    }
+}
+
+/* Wait for log lines containing a and then b (in one event or two); 1
+ * when both were seen. */
+static int see_log(struct http_stream *s, const char *a, const char *b)
+{
+    char data[EV_MAX];
+    double end = emu_now_ms() + EMU_REPLY_MS;
+    const char *at;
+    int seen_a = 0;
+
+    while (emu_now_ms() < end) {
+        if (!next_log(s, data, EMU_REPLY_MS))
+            continue;
+        at = data;
+        if (!seen_a && (at = strstr(data, a)) != NULL)
+            seen_a = 1;
+        if (seen_a && at && strstr(at, b))
+            return 1;
+    }
+    return 0;
+}
+
+/* The communication log as it happens: a packet in and its answer out,
+ * in the --log format; a page reconnecting with the last id it had goes
+ * on after it, one opened anew shows what came before. */
+static void test_log(struct emu_client *c)
+{
+    struct http_stream s, again;
+    char hdr[64], data[EV_MAX];
+    float w;
+
+    REQUIRE(http_stream_open(&s, web, "/events", EMU_REPLY_MS) == 0);
+    CHECK(emu_get_float(c, WSG_CMD_GET_WIDTH, &w) == 0);
+    CHECK(see_log(&s, " in 43h GetOpeningWidth\n",
+                  " out 43h GetOpeningWidth E_SUCCESS width="));
+    CHECK(s.id[0] != '\0');
+    http_stream_close(&s);
+
+    /* Reconnected with its last id: only what is new. */
+    snprintf(hdr, sizeof hdr, "Last-Event-ID: %s\r\n", s.id);
+    CHECK(emu_get_float(c, WSG_CMD_GET_SPEED, &w) == 0);
+    REQUIRE(http_stream_open_with(&again, web, "/events", hdr, EMU_REPLY_MS) ==
+            0);
+    CHECK_EQ(next_log(&again, data, EMU_REPLY_MS), 1);
+    CHECK(strstr(data, " 44h ") != NULL);
+    CHECK(strstr(data, " 43h ") == NULL);
+    http_stream_close(&again);
+
+    /* A new page: the history kept. */
+    REQUIRE(http_stream_open(&again, web, "/events", EMU_REPLY_MS) == 0);
+    CHECK_EQ(next_log(&again, data, EMU_REPLY_MS), 1);
+    CHECK(strstr(data, " 43h ") != NULL && strstr(data, " 44h ") != NULL);
+    http_stream_close(&again);
+}
+
+/* The scenario panel: the control channel's commands, answered with its
+ * line. */
+static void test_control(struct ctl *k)
+{
+    CHECK_EQ(get("POST", "/control", FORM, "line=part+25+80"), 200);
+    CHECK(strcmp(ans.body, "{\"ok\":true,\"answer\":\"ok part 25 80\"}") == 0);
+    CHECK(strstr(ctl_cmd(k, "state"), "\"part\":{\"width\":25.000"));
+    CHECK_EQ(get("POST", "/control", FORM, "line=obstacle+12.5"), 200);
+    CHECK(strstr(ctl_cmd(k, "state"), "\"obstacle\":12.500"));
+    CHECK_EQ(get("POST", "/control", FORM, "line=obstacle+none"), 200);
+    CHECK(strstr(ctl_cmd(k, "state"), "\"obstacle\":null"));
+    CHECK_EQ(get("POST", "/control", FORM, "line=part+none"), 200);
+    CHECK_EQ(get("POST", "/control", FORM, "line=part+wide"), 400);
+    CHECK(strstr(ans.body, "\"ok\":false,\"answer\":\"error ") != NULL);
+    CHECK_EQ(get("POST", "/control", FORM, "line="), 400);
+    CHECK(strstr(ans.body, "\"error\":\"no command") != NULL);
+    CHECK_EQ(get("POST", "/control", FORM, "line=time%0Atime"), 400);
+    CHECK_EQ(get("GET", "/control", NULL, NULL), 405);
+}
+
+/* On loopback, another site's name in Host is not answered (DNS
+ * rebinding); loopback names are. */
+static void test_host(void)
+{
+    char host[96];
+    const char *port = strrchr(web, ':');
+
+    CHECK_EQ(get("GET", "/state.json", "Host: attacker.example\r\n", NULL),
+             421);
+    snprintf(host, sizeof host, "Host: localhost%s\r\n", port);
+    CHECK_EQ(get("GET", "/state.json", host, NULL), 200);
+    snprintf(host, sizeof host, "Host: [::1]%s\r\n", port);
+    CHECK_EQ(get("GET", "/state.json", host, NULL), 200);
+    snprintf(host, sizeof host, "Host: localhost.attacker.example%s\r\n",
+             port);
+    CHECK_EQ(get("GET", "/state.json", host, NULL), 421);
+}
+
+/* 200 requests in the server's hands at once, all answered, while the
+ * gripper still answers on its own interface. */
+static void test_load(struct emu_client *c)
+{
+    float w;
+
+    CHECK_EQ(http_load(web, "/state.json", 200, EMU_REPLY_MS * 4), 200);
+    CHECK_EQ(http_load(web, "/", 200, EMU_REPLY_MS * 4), 200);
+    CHECK(emu_get_float(c, WSG_CMD_GET_WIDTH, &w) == 0);
+}
+
 /* Many streams see one change; closed by their clients, all are freed
  * without a change to push them out. */
 static void test_many(struct emu *e, struct ctl *k)
@@ -348,6 +473,10 @@ int main(int argc, char **argv)
     test_push(&c, &k, &s);
     test_stop_ack(&c, &k, &s);
     test_many(&e, &k);
+    test_log(&c);
+    test_control(&k);
+    test_host();
+    test_load(&c);
 
     /* Closing with a stream open (suspended, waiting for a change). */
     emu_close(&c);

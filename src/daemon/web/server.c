@@ -65,6 +65,8 @@
  * resumed streams end. */
 #define WEB_RUN_ROUNDS 4
 #define WEB_INFO_MAX   1536u
+/* "id: " and a 64-bit number with its newline. */
+#define WEB_ID_MAX 26u
 
 /* One client of /events. It sends its own copy of an event, so a newer
  * one can be made while it is half sent; a slow client skips to the
@@ -261,8 +263,9 @@ static size_t log_event(struct wsg_web *web, struct web_sub *sub)
                web->log_ring[end % WSG_WEB_LOG_RING] != '\n')
             end++;
         len = (size_t)(end - sub->log_off);
-        /* "data: ", the line, its newline, and the event's blank line. */
-        room = cap - used - 8;
+        /* "data: ", the line, its newline, the id line and the event's
+         * blank line. */
+        room = cap - used - 8 - WEB_ID_MAX;
         if (len > room) {
             if (used > sizeof head - 1)
                 break;  /* the next event takes it */
@@ -275,6 +278,11 @@ static size_t log_event(struct wsg_web *web, struct web_sub *sub)
         sub->buf[used++] = '\n';
         sub->log_off = end + 1;
     }
+    /* The offset as the event's id: a browser that reconnects sends it
+     * back (Last-Event-ID) and goes on where it was. */
+    n = snprintf(sub->buf + used, WEB_ID_MAX, "id: %llu\n",
+                 (unsigned long long)sub->log_off);
+    used += (size_t)n;
     sub->buf[used++] = '\n';
     return used;
 }
@@ -619,6 +627,7 @@ static enum MHD_Result serve_events(struct wsg_web *web,
                                     struct wsg_web_req *req)
 {
     struct MHD_Connection *conn = req->conn;
+    const char *last;
     struct MHD_Response *r;
     struct web_sub *sub;
     enum MHD_Result ret;
@@ -642,10 +651,19 @@ static enum MHD_Result serve_events(struct wsg_web *web,
     if (web->nsubs++ == 0)
         wsg_web_world_watch(web, 1);
     /* The log as far back as it is kept: a page reloaded shows what
-     * happened before. */
+     * happened before; a stream reconnected goes on after the last line
+     * it had. */
     sub->log_off = web->log_head > WSG_WEB_LOG_RING
                        ? web->log_head - WSG_WEB_LOG_RING
                        : 0;
+    last = MHD_lookup_connection_value(conn, MHD_HEADER_KIND, "Last-Event-ID");
+    if (last && *last) {
+        char *end;
+        unsigned long long off = strtoull(last, &end, 10);
+
+        if (*end == '\0' && off <= web->log_head && off > sub->log_off)
+            sub->log_off = off;
+    }
     /* From here on sub_free, run when r goes, unlinks it. */
     if (MHD_add_response_header(r, MHD_HTTP_HEADER_CONTENT_TYPE,
                                 "text/event-stream") != MHD_YES ||
@@ -1014,6 +1032,10 @@ static void on_log(void *cls, const char *fmt, va_list ap)
     n = strlen(msg);
     while (n > 0 && msg[n - 1] == '\n')
         msg[--n] = '\0';
+    /* A page closed while its event stream was open: MHD cannot end the
+     * stream on the gone socket. That is how every page leaves. */
+    if (strstr(msg, "socket is no longer available"))
+        return;
     fprintf(stderr, "wsgemu: web: %s\n", msg);
 }
 
