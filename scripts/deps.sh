@@ -9,7 +9,7 @@ pkgs="cmake make gcc libc6-dev"
 pkgs="$pkgs pkgconf liblua5.4-dev"
 # The web page (--web) is served by GNU libmicrohttpd, found with
 # pkg-config; its -dev package brings GnuTLS's headers, which the static
-# build's stand-in for GnuTLS is checked against (src/static/gnutls_none.c).
+# build's stand-in for GnuTLS is checked against (src/daemon/web/gnutls_none.c).
 pkgs="$pkgs libmicrohttpd-dev"
 # The memcheck test (tests/memcheck.sh) runs the daemon under valgrind.
 pkgs="$pkgs valgrind"

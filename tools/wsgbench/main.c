@@ -135,6 +135,7 @@ static void usage(FILE *out)
         "  --script-seconds S     each rate of the PD script (default 3)\n"
         "  --no-script            skip the script rows\n"
         "  --no-gcl               skip the GCL rows\n"
+        "  --no-web               skip the web page rows\n"
         "  --quick                1000 samples, 0.5 s throughput, 2 s "
         "jitter,\n"
         "                         1 s idle, 1 s moving, 0.5 s per PD rate,\n"
@@ -160,7 +161,9 @@ static void usage(FILE *out)
         "rate and no overrun. GCL: POS? on a wsgemu --text-interface on\n"
         "against 43h on another wsgemu, both started here, in alternating\n"
         "rounds (the reference column of these rows is the 43h), median\n"
-        "and p99.\n"
+        "and p99. Web: 43h on a wsgemu --web with a process reading the\n"
+        "page's event stream against the same without it, in alternating\n"
+        "rounds, median and p99.\n"
         "\n",
         out);
     /* Two pieces: C99 promises string literals of 4095 bytes only. */
@@ -216,6 +219,7 @@ static int parse_opts(struct opts *o, int argc, char **argv)
         {"script-seconds", required_argument, NULL, 's'},
         {"no-script", no_argument, NULL, 'N'},
         {"no-gcl", no_argument, NULL, 'G'},
+        {"no-web", no_argument, NULL, 'W'},
         {"quick", no_argument, NULL, 'q'},
         {"help", no_argument, NULL, 'h'},
         {NULL, 0, NULL, 0}};
@@ -285,6 +289,9 @@ static int parse_opts(struct opts *o, int argc, char **argv)
         case 'G':
             o->no_gcl = 1;
             break;
+        case 'W':
+            o->no_web = 1;
+            break;
         case 'F':
             o->fleet = 0;
             break;
@@ -347,13 +354,16 @@ static int find_exes(struct bench *b)
     if (access(b->emu_exe, X_OK) < 0) {
         /* Attached, only the fleet, script and GCL rows start one. */
         if (b->attach && !b->o.emu) {
-            if (b->o.fleet > 0 || !b->o.no_script || !b->o.no_gcl)
-                msg("cannot run %s: %s: fleet, script and GCL rows skipped "
+            if (b->o.fleet > 0 || !b->o.no_script || !b->o.no_gcl ||
+                !b->o.no_web)
+                msg("cannot run %s: %s: fleet, script, GCL and web rows "
+                    "skipped "
                     "(give --emu PATH)",
                     b->emu_exe, strerror(errno));
             b->o.fleet = 0;
             b->o.no_script = 1;
             b->o.no_gcl = 1;
+            b->o.no_web = 1;
         } else {
             msg("cannot run %s: %s (give --emu PATH)", b->emu_exe,
                 strerror(errno));
@@ -594,6 +604,8 @@ int main(int argc, char **argv)
     if (!b.o.no_script && bench_script(&b) < 0)
         b.failures++;
     if (!b.o.no_gcl && bench_gcl(&b) < 0)
+        b.failures++;
+    if (!b.o.no_web && bench_web(&b) < 0)
         b.failures++;
     if (b.o.fleet > 0 && bench_fleet(&b) < 0)
         b.failures++;

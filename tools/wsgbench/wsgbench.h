@@ -54,6 +54,7 @@ struct opts {
     double script_s;     /* each rate of the PD script */
     int no_script;
     int no_gcl;
+    int no_web;
 };
 
 struct server {
@@ -206,5 +207,9 @@ int bench_script(struct bench *b);
 /* ---- GCL, the text interface (gcl.c) ---- */
 
 int bench_gcl(struct bench *b);
+
+/* ---- the web page: 43h with a page watching (web.c) ---- */
+
+int bench_web(struct bench *b);
 
 #endif

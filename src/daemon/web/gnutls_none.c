@@ -1,15 +1,16 @@
 /*
- * GnuTLS as libmicrohttpd sees it in the static build: nothing. Debian
- * builds libmicrohttpd.a with HTTPS support, so its objects name these
- * GnuTLS functions even in a daemon that never asks for TLS, and a static
- * link would have to take libgnutls.a with its own dependencies; Debian
- * ships no static archive of one of them (p11-kit), so that link cannot
- * be made. The web page is served over plain HTTP (never MHD_USE_TLS),
- * which reaches none of these but the library's start and end
- * (gnutls_global_init, gnutls_global_deinit): those succeed, and every
- * other one fails, as a TLS library would that has nothing to offer.
- * Linked only into the static programs (CMakeLists.txt); the dynamic build
- * links Debian's libgnutls.
+ * GnuTLS as libmicrohttpd sees it in wsgemu: nothing. Debian builds
+ * libmicrohttpd with HTTPS support, so its objects name these GnuTLS
+ * functions even in a daemon that never asks for TLS. Linking the shared
+ * library would load GnuTLS and eight more libraries into every daemon
+ * (more than doubling an idle one's memory), and a static link would need
+ * libgnutls.a with its own dependencies, one of which Debian ships no
+ * static archive of (p11-kit). So every build links libmicrohttpd.a and
+ * this file (CMakeLists.txt). The web page is served over plain HTTP
+ * (never MHD_USE_TLS), which reaches none of these but the library's
+ * start and end (gnutls_global_init, gnutls_global_deinit): those
+ * succeed, and every other one fails, as a TLS library would that has
+ * nothing to offer.
  */
 #include <gnutls/abstract.h>
 #include <gnutls/gnutls.h>
@@ -32,7 +33,7 @@ void gnutls_global_deinit(void)
 const char *gnutls_strerror(int error)
 {
     (void)error;
-    return "TLS is not available in this static build";
+    return "TLS is not available in wsgemu";
 }
 
 int gnutls_init(gnutls_session_t *session, unsigned int flags)
