@@ -165,6 +165,18 @@ talk() {
     'ok {"width":110.000,'*) ;;
     *) fail "control state: $out" ;;
     esac
+    # The web page on port 80: its state as JSON.
+    [ "${WEB:-}" = 1 ] || return 0
+    # shellcheck disable=SC2016 # expanded by the inner bash
+    out=$(timeout 30 nsenter --net="/proc/$pid/ns/net" bash -c '
+        exec 5<>/dev/tcp/127.0.0.1/80 &&
+        printf "GET /state.json HTTP/1.0\r\n\r\n" >&5 &&
+        timeout 10 cat <&5') || fail "no answer from the web page"
+    echo "  web:     $(head -1 <<<"$out" | tr -d '\r')"
+    case $out in
+    'HTTP/1.'?' 200 OK'*'{"width":110.000,'*) ;;
+    *) fail "web page: ${out:0:200}" ;;
+    esac
 }
 
 # ---- podman run ----------------------------------------------------------
@@ -234,10 +246,10 @@ if [ "$MODE" != rootfs ]; then
         echo "$ME: podman run $IMAGE (the image's CMD)"
         run_container wsgemu-ctest-cmd
         case $READY in
-        "ready tcp=0.0.0.0:1000 udp=0.0.0.0:1500>1501 control=0.0.0.0:2000") ;;
+        "ready tcp=0.0.0.0:1000 udp=0.0.0.0:1500>1501 control=0.0.0.0:2000 web=0.0.0.0:80") ;;
         *) fail "the image's CMD should serve its exposed ports: $READY" ;;
         esac
-        talk "$PID" podman exec wsgemu-ctest-cmd /usr/bin/wsgctl
+        WEB=1 talk "$PID" podman exec wsgemu-ctest-cmd /usr/bin/wsgctl
         stop_container wsgemu-ctest-cmd
 
         # Arguments replace the CMD: a fleet counts its ports up.
@@ -273,7 +285,7 @@ if [ "$MODE" != run ]; then
     PID=$!
     READY=$(wait_ready "$T/rootfs.out" "$PID") || fail "the entrypoint did not start"
     echo "  $READY"
-    talk "$PID" nsenter --net="/proc/$PID/ns/net" chroot "$T/rootfs" /usr/bin/wsgctl
+    WEB=1 talk "$PID" nsenter --net="/proc/$PID/ns/net" chroot "$T/rootfs" /usr/bin/wsgctl
     kill -TERM "$PID"
     st=0
     wait "$PID" || st=$?
