@@ -128,6 +128,15 @@ struct wsg_axis_range wsg_axis_config_range(const struct wsg_axis_config *cfg,
 int wsg_axis_config_set(struct wsg_axis_config *cfg, enum wsg_axis_setting s,
                         double v, struct wsg_axis_range *valid);
 
+/* Change a setting of a running model's configuration (the web page's
+ * settings), checked as wsg_axis_config_set checks it. An acceleration
+ * or force limit also becomes the session's value at once, as Set
+ * Acceleration (30h) and Set Force Limit (32h) make it; a power cycle
+ * restores the new defaults. A clamping travel or tolerance counts from
+ * the next grasp. Returns 0, or -ERANGE with nothing changed. */
+int wsg_axis_configure(struct wsg_axis *ax, enum wsg_axis_setting s, double v,
+                       struct wsg_axis_range *valid);
+
 void wsg_axis_init(struct wsg_axis *ax, const struct wsg_axis_config *cfg,
                    wsg_axis_done_fn on_done, void *ctx);
 /* Power cycle: session settings back to defaults, not referenced. */

@@ -1340,6 +1340,20 @@ void wsg_axis_set_force_limit(struct wsg_axis *ax, double force)
     ax->force_limit = wsg_clamp(force, r.min, r.max);
 }
 
+int wsg_axis_configure(struct wsg_axis *ax, enum wsg_axis_setting s, double v,
+                       struct wsg_axis_range *valid)
+{
+    int r = wsg_axis_config_set(&ax->cfg, s, v, valid);
+
+    if (r < 0 || s == WSG_AXIS_WIDTH)
+        return r;
+    if (s == WSG_AXIS_ACCELERATION)
+        wsg_axis_set_acc(ax, v);
+    else if (s == WSG_AXIS_FORCE_LIMIT)
+        wsg_axis_set_force_limit(ax, v);
+    return 0;
+}
+
 void wsg_axis_set_overdrive(struct wsg_axis *ax, int on)
 {
     ax->overdrive = on ? 1 : 0;

@@ -1040,6 +1040,34 @@ static const struct wsg_setting *find_key(const char *key)
     return NULL;
 }
 
+int wsg_options_set(struct wsg_options *o, const char *key, const char *val,
+                    char *err, size_t errcap)
+{
+    const struct wsg_setting *s = find_key(key);
+    const struct wsg_model_value *v;
+    struct wsg_axis_range r;
+    char why[512];
+
+    if (!s) {
+        snprintf(err, errcap, "unknown setting '%s'", key);
+        return -EINVAL;
+    }
+    if (give(o, s, val, 0, why, sizeof why) < 0) {
+        snprintf(err, errcap, "%s: %s", key, why);
+        return -EINVAL;
+    }
+    if (s->type != WSG_SETTING_MODEL)
+        return 0;
+    /* As finish() checks it, with the same words. */
+    v = field(o, s->at);
+    if (wsg_axis_config_set(&o->axis, s->quantity, v->value, &r) == 0)
+        return 0;
+    snprintf(err, errcap, "%s: %g %s is out of range: %g..%g %s for the %s",
+             key, v->value, s->unit, r.min, r.max, s->unit,
+             o->model ? o->model : "wsg50");
+    return -EINVAL;
+}
+
 enum wsg_options_result wsg_options_read_config(struct wsg_options *o, FILE *f,
                                                 const char *path)
 {

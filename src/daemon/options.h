@@ -23,11 +23,11 @@
 #define WSG_SCRIPT_MEMORY_MIN_MIB 1u
 #define WSG_SCRIPT_MEMORY_MAX_MIB 1024u
 /* GCL's MOVE, GRIP and RELEASE without a speed, mm/s. */
-#define WSG_GCL_DEFAULT_SPEED     100.0
-#define WSG_STEP_US_MIN           100u
-#define WSG_STEP_US_MAX           100000u
-#define WSG_CAN_ID_DEFAULT        0x000u
-#define WSG_CAN_ID_MAX            0x7FEu /* answers go on ID + 1, an 11-bit ID too */
+#define WSG_GCL_DEFAULT_SPEED 100.0
+#define WSG_STEP_US_MIN       100u
+#define WSG_STEP_US_MAX       100000u
+#define WSG_CAN_ID_DEFAULT    0x000u
+#define WSG_CAN_ID_MAX        0x7FEu /* answers go on ID + 1, an 11-bit ID too */
 /* Room for the strings a config file gives (paths, names, the tag): they
  * must outlive the file's line buffer, and options hold no heap memory. */
 #define WSG_OPTIONS_STRBUF 2048u
@@ -181,6 +181,14 @@ enum wsg_options_result wsg_options_read_config(struct wsg_options *o, FILE *f,
  * model's config with every setting checked against the model's ranges,
  * the fleet's counting checked. Prints its error itself. */
 enum wsg_options_result wsg_options_finish(struct wsg_options *o);
+/* One config-file key given to finished options (the model known), as
+ * the web page's settings give it: val read as the file's value is, and a
+ * value whose range is the model's checked against it and written into
+ * o->axis at once. A text value points at val: the caller keeps it. On
+ * error, "KEY: reason" (as the command line words it) goes to err, and
+ * -EINVAL is returned; o may then be half changed (give it a copy). */
+int wsg_options_set(struct wsg_options *o, const char *key, const char *val,
+                    char *err, size_t errcap);
 /* Parse argv over the current contents of o (call wsg_options_defaults
  * first). Prints usage or a one-line "wsgemu: ..." error itself. */
 enum wsg_options_result wsg_options_parse(struct wsg_options *o, int argc,

@@ -498,6 +498,15 @@ fail:
     return r;
 }
 
+static void can_configure(struct wsg_transport *t,
+                          const struct wsg_transport_settings *s)
+{
+    struct wsg_can *can = t->state;
+
+    can->check_crc = s->check_crc;
+    can->parser.check_crc = s->check_crc ? 1 : 0;
+}
+
 const struct wsg_transport_ops wsg_can_ops = {
     .name = "can",
     .open = can_open,
@@ -506,4 +515,5 @@ const struct wsg_transport_ops wsg_can_ops = {
     .describe = can_describe,
     .lookup = can_lookup,
     .reap = NULL,
+    .configure = can_configure,
 };

@@ -497,6 +497,15 @@ fail:
     return r;
 }
 
+static void pty_configure(struct wsg_transport *t,
+                          const struct wsg_transport_settings *s)
+{
+    struct wsg_pty *pty = t->state;
+
+    pty->check_crc = s->check_crc;
+    pty->parser.check_crc = s->check_crc ? 1 : 0;
+}
+
 const struct wsg_transport_ops wsg_pty_ops = {
     .name = "pty",
     .open = pty_open,
@@ -505,4 +514,5 @@ const struct wsg_transport_ops wsg_pty_ops = {
     .describe = pty_describe,
     .lookup = pty_lookup,
     .reap = pty_reap,
+    .configure = pty_configure,
 };

@@ -72,6 +72,7 @@ struct wsg_tcp_conn {
     /* The device already knows it is gone (the control channel's drop
      * tells it at once, before the close that follows the batch). */
     int reported;
+    int text; /* speaks GCL: the listener's mode when it was accepted */
     struct wsg_parser parser;
     struct wsg_gcl gcl; /* --text-interface: lines instead of packets */
     struct wsg_session session;
@@ -127,7 +128,7 @@ static void conn_read(struct wsg_tcp_conn *c)
         ssize_t n = recv(c->peer.watch.fd, buf, sizeof buf, MSG_DONTWAIT);
 
         if (n > 0) {
-            if (c->tcp->text)
+            if (c->text)
                 wsg_gcl_input(&c->gcl, buf, (size_t)n);
             else
                 wsg_device_input(c->tcp->dev, &c->session, &c->parser, buf,
@@ -244,7 +245,8 @@ static void conn_accept(struct wsg_tcp *tcp, int fd,
                      conn_packet, c);
     /* For the communication log. */
     snprintf(c->session.peer, sizeof c->session.peer, "tcp %s", p->name);
-    if (tcp->text)
+    c->text = tcp->text;
+    if (c->text)
         wsg_gcl_init(&c->gcl, tcp->dev, &c->session, &tcp->gcl);
 }
 
@@ -326,6 +328,22 @@ static unsigned tcp_drop_all(struct wsg_transport *t)
         n++;
     }
     return n;
+}
+
+static void tcp_configure(struct wsg_transport *t,
+                          const struct wsg_transport_settings *s)
+{
+    struct wsg_tcp *tcp = t->state;
+    unsigned i;
+
+    tcp->check_crc = s->check_crc;
+    tcp->text = s->text;
+    for (i = 0; i < tcp->conns.cfg.max; i++) {
+        struct wsg_peer *p = wsg_peer_live(&tcp->conns, i);
+
+        if (p)
+            conn_of(p)->parser.check_crc = s->check_crc ? 1 : 0;
+    }
 }
 
 static int tcp_describe(const struct wsg_transport *t, char *buf, size_t len)
@@ -422,4 +440,5 @@ const struct wsg_transport_ops wsg_tcp_ops = {
     .lookup = tcp_lookup,
     .reap = tcp_reap,
     .drop_all = tcp_drop_all,
+    .configure = tcp_configure,
 };

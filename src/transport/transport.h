@@ -86,6 +86,12 @@ struct wsg_transport_host {
     void *ctx;
 };
 
+/* What the web page's settings change on a running transport. */
+struct wsg_transport_settings {
+    int check_crc; /* check received checksums */
+    int text;      /* TCP: GCL instead of the binary protocol */
+};
+
 struct wsg_transport_ops {
     const char *name; /* key on the ready line: "tcp" */
     /* Open from cfg (this transport's config struct); on failure put a
@@ -109,6 +115,13 @@ struct wsg_transport_ops {
      * its peer had gone: the device is told at once, the sockets are
      * closed by reap. Returns how many were dropped. */
     unsigned (*drop_all)(struct wsg_transport *t);
+    /* Optional (the web page's settings). Take s: the checksum check at
+     * once, for the packets being received too; the text interface for
+     * connections accepted from now on (one open keeps the protocol it
+     * started with: switching in the middle of a stream would misread
+     * it). */
+    void (*configure)(struct wsg_transport *t,
+                      const struct wsg_transport_settings *s);
 };
 
 struct wsg_transport {

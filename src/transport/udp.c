@@ -230,6 +230,15 @@ fail:
     return r;
 }
 
+static void udp_configure(struct wsg_transport *t,
+                          const struct wsg_transport_settings *s)
+{
+    struct wsg_udp *udp = t->state;
+
+    /* Read per datagram: the next one is checked the new way. */
+    udp->check_crc = s->check_crc;
+}
+
 const struct wsg_transport_ops wsg_udp_ops = {
     .name = "udp",
     .open = udp_open,
@@ -238,4 +247,5 @@ const struct wsg_transport_ops wsg_udp_ops = {
     .describe = udp_describe,
     .lookup = udp_lookup,
     .reap = NULL,
+    .configure = udp_configure,
 };

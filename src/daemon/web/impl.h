@@ -76,6 +76,9 @@ struct wsg_web {
     struct wsg_ctl_session ctl_session;
     char ctl_answer[WSG_WEB_ANSWER_MAX];
     size_t ctl_answer_len;
+    /* The startup script the page set (settings.c): the options point
+     * here once it has, as they point at argv or their own buffer. */
+    char script_path[WSG_WEB_VALUE_MAX];
 };
 
 enum wsg_web_method {
@@ -157,6 +160,14 @@ enum MHD_Result wsg_web_serve_motion(struct wsg_web *web,
 /* settings.c */
 enum MHD_Result wsg_web_serve_settings(struct wsg_web *web,
                                        struct wsg_web_req *req);
+/* Check the settings fields (the config file's keys, as POST
+ * /settings.json takes them) and, all of them good, save them to the
+ * config file (save) and apply them to every gripper. 0; -EINVAL for a
+ * bad field or no config file to save to, another -errno when saving
+ * failed; then nothing changed and err says why. */
+int wsg_web_settings_apply(struct wsg_web *web,
+                           const struct wsg_web_field *fields, size_t n,
+                           int save, char *err, size_t errcap);
 /* scripts.c */
 enum MHD_Result wsg_web_serve_scripts(struct wsg_web *web,
                                       struct wsg_web_req *req);
