@@ -17,7 +17,10 @@
 (function () {
   const tab = document.getElementById('tab-settings');
   const el = wsg.el;
-  const form = el('form', { id: 'settings-form' });
+  /* The server checks every value with the command line's rules and says
+   * what is wrong; the browser's own check (min, max) would only stop the
+   * form without that message. */
+  const form = el('form', { id: 'settings-form', noValidate: true });
   const fields = el('fieldset');
   const config = el('p', { id: 'settings-config' });
   const message = el('p', { id: 'settings-message', className: 'answer' });

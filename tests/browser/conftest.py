@@ -80,7 +80,9 @@ def wait(driver, timeout=WAIT_S):
 
 
 def text(driver, element_id):
-    return driver.find_element(By.ID, element_id).text
+    """An element's text, shown or not (another tab's too)."""
+    return driver.find_element(By.ID, element_id).get_attribute(
+        "textContent").strip()
 
 
 def post(url, fields):
