@@ -593,6 +593,14 @@ static const struct wsg_setting settings[] = {
      .help = "startup script: run the Lua script\n"
              "FILE on the gripper at start;\n"
              "require finds modules beside it"},
+    {.name = "script-dir",
+     .type = WSG_SETTING_TEXT,
+     .at = WSG_AT(script_dir),
+     .section = WSG_SECTION_GRIPPER,
+     .arg = "DIR",
+     .help = "the gripper's /user: the web page\n"
+             "lists, uploads, runs and deletes the\n"
+             "scripts in DIR (default none)"},
     {.name = "script-memory",
      .type = WSG_SETTING_UINT,
      .at = WSG_AT(script_memory),

@@ -86,6 +86,7 @@ struct wsg_options {
     uint32_t step_us;
     const char *script_path; /* --script FILE: the startup script */
     uint32_t script_memory;  /* --script-memory MiB */
+    const char *script_dir;  /* --script-dir DIR: the page's; NULL: none */
     const char *model;       /* NULL: the default model */
     /* The web page's settings, the model's defaults unless given. */
     struct wsg_model_value acceleration; /* mm/s^2 */

@@ -10,7 +10,14 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "script.h"
 #include "wsg/schema.h"
+
+/* The script's name and error are cut to these many bytes of JSON: the
+ * whole error is in the control channel's `script status` and the log;
+ * the state must stay one control channel line. */
+#define STATE_SCRIPT_NAME_MAX  80u
+#define STATE_SCRIPT_ERROR_MAX 320u
 
 /* Appends to buf at *used; what does not fit is cut, never overrun. */
 static void append(char *buf, size_t cap, size_t *used, const char *fmt, ...)
@@ -25,6 +32,68 @@ static void append(char *buf, size_t cap, size_t *used, const char *fmt, ...)
     va_end(ap);
     if (n > 0)
         *used += (size_t)n < cap - *used ? (size_t)n : cap - *used - 1;
+}
+
+/* s as a JSON string, quotes included, of at most max bytes: cut where
+ * the next character's escape would not fit. Control bytes are escaped,
+ * other bytes go as they are (a script's error is UTF-8 or what it
+ * made). */
+static void append_string(char *buf, size_t cap, size_t *used, const char *s,
+                          size_t max)
+{
+    size_t start = *used;
+
+    append(buf, cap, used, "\"");
+    for (; *s; s++) {
+        unsigned char ch = (unsigned char)*s;
+        char esc[8];
+
+        if (ch == '"' || ch == '\\')
+            snprintf(esc, sizeof esc, "\\%c", ch);
+        else if (ch == '\n')
+            snprintf(esc, sizeof esc, "\\n");
+        else if (ch < 0x20 || ch == 0x7F)
+            snprintf(esc, sizeof esc, "\\u%04x", ch);
+        else
+            snprintf(esc, sizeof esc, "%c", ch);
+        if (*used - start + strlen(esc) + 1 > max)
+            break;
+        append(buf, cap, used, "%s", esc);
+    }
+    append(buf, cap, used, "\"");
+}
+
+/* The script host's part: which script ran last, whether it runs, and
+ * why it failed (D20 is in the flags). */
+static void append_script(char *buf, size_t cap, size_t *used,
+                          const struct wsg_gripper *g)
+{
+    struct wsg_script_status st;
+    const char *name;
+
+    if (!g->script) {
+        append(buf, cap, used,
+               "\"script\":{\"name\":null,\"running\":false,"
+               "\"error\":null},");
+        return;
+    }
+    wsg_script_status(g->script, &st);
+    append(buf, cap, used, "\"script\":{\"name\":");
+    if (st.file) {
+        /* Its file name: the page knows the directory. */
+        name = strrchr(st.file, '/');
+        append_string(buf, cap, used, name ? name + 1 : st.file,
+                      STATE_SCRIPT_NAME_MAX);
+    } else {
+        append(buf, cap, used, "null");
+    }
+    append(buf, cap, used,
+           ",\"running\":%s,\"error\":", st.running ? "true" : "false");
+    if (st.error)
+        append_string(buf, cap, used, st.error, STATE_SCRIPT_ERROR_MAX);
+    else
+        append(buf, cap, used, "null");
+    append(buf, cap, used, "},");
 }
 
 void wsg_state_format_time(char *buf, size_t len, uint64_t us)
@@ -88,6 +157,7 @@ size_t wsg_state_format(char *buf, size_t cap, const struct wsg_gripper *g,
         s->paused ? "true" : "false", s->scale,
         (unsigned long)wsg_gripper_delayed(g),
         (unsigned long long)wsg_gripper_delay_dropped(g));
+    append_script(buf, cap, &used, g);
     /* The world's part and obstacle too: the web page draws them
      * between the fingers. */
     if (wsg_axis_part(ax, &part_width, &stiffness))

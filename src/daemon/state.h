@@ -14,8 +14,10 @@
 #include "gripper.h"
 #include "sched.h"
 
-/* Room for the longest object: every flag set, the longest names. */
-#define WSG_STATE_JSON_MAX 1536u
+/* Room for the longest object: every flag set, the longest names, the
+ * script's name and error as long as they are kept here. It stays one
+ * control channel answer ("ok " and the newline within 2048 bytes). */
+#define WSG_STATE_JSON_MAX 2040u
 
 /* What wsg_state_format leaves out. */
 enum wsg_state_parts {
@@ -32,7 +34,8 @@ void wsg_state_format_time(char *buf, size_t len, uint64_t us);
  * WSG_STATE_JSON_MAX always does): width, speed, force, temperature,
  * flags and their names, grasp state and its name, statistics, simulated
  * time, whether time is paused and its scale, the delay line's figures,
- * the part placed between the fingers (null: none). Returns the
+ * the script host's script (its name, whether it runs, its error), the
+ * part placed between the fingers and the obstacle (null: none). Returns the
  * length. */
 size_t wsg_state_format(char *buf, size_t cap, const struct wsg_gripper *g,
                         const struct wsg_sched *s, enum wsg_state_parts parts);

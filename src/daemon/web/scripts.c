@@ -1,30 +1,515 @@
 /*
- * The page's scripting: the script directory (GET /scripts.json, GET, PUT
- * and DELETE /scripts/NAME) and the script host (POST /script/run,
- * /script/stop).
+ * The page's scripting: the script directory (--script-dir, the gripper's
+ * /user) as a file manager (GET /scripts.json; GET, PUT and DELETE
+ * /scripts/NAME) and the script host driven from it (POST /script/run
+ * and /script/stop; GET /script/status and /script/output).
+ *
+ * Names are plain file names ending in .lua (name_check), and the
+ * directory is opened once per request: every file operation is relative
+ * to that descriptor (openat, renameat, unlinkat) and follows no symbolic
+ * link, so neither a name nor a link planted in the directory leads out
+ * of it. An upload is written to a hidden temporary file and renamed over
+ * the name, so a script is never seen half written (a running script's
+ * `require` included).
  */
-#include "impl.h"
+#define _GNU_SOURCE
 
+#include <dirent.h>
+#include <errno.h>
+#include <fcntl.h>
+#include <limits.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "impl.h"
+#include "wsg/proto.h"
+
+/* 422: a script that does not compile; older MHDs name it otherwise. */
+#define HTTP_UNPROCESSABLE 422u
+
+/* The longest script name, ".lua" included. */
+#define SCRIPT_NAME_MAX 64u
+/* Scripts listed at most: a directory filled by hand could hold more
+ * than a page can show ("more" tells how many were left out). */
+#define SCRIPT_LIST_MAX 1024u
+/* One entry of the list: the name escaped and two numbers. */
+#define SCRIPT_ENTRY_MAX (SCRIPT_NAME_MAX + 96u)
+
+struct script_entry {
+    char name[SCRIPT_NAME_MAX + 1];
+    long long size;
+    long long mtime;
+};
+
+/* 0 when name is one the directory may hold: letters, digits, '_', '.'
+ * and '-', ending in ".lua", not starting with a dot (the upload's
+ * temporary files do), at most SCRIPT_NAME_MAX bytes. Else -EINVAL with
+ * the reason in why. */
+static int name_check(const char *name, char *why, size_t cap)
+{
+    size_t n = strlen(name), i;
+
+    if (n == 0) {
+        snprintf(why, cap, "no script name");
+        return -EINVAL;
+    }
+    if (n > SCRIPT_NAME_MAX) {
+        snprintf(why, cap, "a script name has at most %u characters",
+                 SCRIPT_NAME_MAX);
+        return -EINVAL;
+    }
+    for (i = 0; i < n; i++) {
+        char ch = name[i];
+
+        if (!((ch >= 'a' && ch <= 'z') || (ch >= 'A' && ch <= 'Z') ||
+              (ch >= '0' && ch <= '9') || ch == '_' || ch == '.' ||
+              ch == '-')) {
+            snprintf(why, cap,
+                     "a script name has only letters, digits, '_', '.' and "
+                     "'-' (no directories): NAME.lua");
+            return -EINVAL;
+        }
+    }
+    if (name[0] == '.') {
+        snprintf(why, cap, "a script name does not start with a dot");
+        return -EINVAL;
+    }
+    if (n < 5 || strcmp(name + n - 4, ".lua") != 0) {
+        snprintf(why, cap, "a script name ends in .lua");
+        return -EINVAL;
+    }
+    return 0;
+}
+
+/* The script directory, opened for one request: its descriptor, or
+ * -errno (-ENXIO: no --script-dir). */
+static int dir_open(const struct wsg_web *web)
+{
+    const char *dir = web->d->opt.script_dir;
+    int fd;
+
+    if (!dir)
+        return -ENXIO;
+    fd = open(dir, O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+    return fd < 0 ? -errno : fd;
+}
+
+/* Why dir_open failed, as the answer: 409, the server is not set up for
+ * it (no directory, or one that is not there). */
+static enum MHD_Result dir_error(const struct wsg_web *web,
+                                 struct MHD_Connection *conn, int err)
+{
+    char msg[PATH_MAX + 128];
+
+    if (err == -ENXIO)
+        return wsg_web_error(conn, MHD_HTTP_CONFLICT,
+                             "no script directory: start wsgemu with "
+                             "--script-dir DIR");
+    snprintf(msg, sizeof msg, "script directory %s: %s",
+             web->d->opt.script_dir, strerror(-err));
+    return wsg_web_error(conn, MHD_HTTP_CONFLICT, msg);
+}
+
+/* A file of the directory for name, not following a link: 0 with *st, or
+ * the answer's status (404 none, 403 not a regular file) with the reason
+ * in why. */
+static unsigned file_stat(int dfd, const char *name, struct stat *st,
+                          char *why, size_t cap)
+{
+    if (fstatat(dfd, name, st, AT_SYMLINK_NOFOLLOW) < 0) {
+        snprintf(why, cap, "%s: %s", name, strerror(errno));
+        return errno == ENOENT ? MHD_HTTP_NOT_FOUND
+                               : MHD_HTTP_INTERNAL_SERVER_ERROR;
+    }
+    if (!S_ISREG(st->st_mode)) {
+        snprintf(why, cap,
+                 "%s is not a regular file of the script "
+                 "directory (a link or a directory): not touched",
+                 name);
+        return MHD_HTTP_FORBIDDEN;
+    }
+    return 0;
+}
+
+static int entry_cmp(const void *a, const void *b)
+{
+    return strcmp(((const struct script_entry *)a)->name,
+                  ((const struct script_entry *)b)->name);
+}
+
+/* GET /scripts.json: {"dir":"...","scripts":[{"name","size","mtime"}],
+ * "more":N}, sorted by name: the regular files with a script's name. */
 enum MHD_Result wsg_web_serve_scripts(struct wsg_web *web,
                                       struct wsg_web_req *req)
 {
-    (void)web;
-    return wsg_web_error(req->conn, MHD_HTTP_NOT_IMPLEMENTED,
-                         "not yet served");
+    struct script_entry *list = NULL;
+    size_t n = 0, more = 0, i, cap, used = 0;
+    char why[128], *json = NULL, dir_esc[2 * PATH_MAX];
+    enum MHD_Result ret = MHD_NO;
+    struct dirent *de;
+    struct stat st;
+    DIR *dir = NULL;
+    int dfd;
+
+    dfd = dir_open(web);
+    if (dfd < 0)
+        return dir_error(web, req->conn, dfd);
+    dir = fdopendir(dfd);
+    if (!dir) {
+        close(dfd);
+        return dir_error(web, req->conn, -errno);
+    }
+    list = malloc(SCRIPT_LIST_MAX * sizeof *list);
+    if (!list)
+        goto out_oom;
+    while ((de = readdir(dir)) != NULL) {
+        if (name_check(de->d_name, why, sizeof why) < 0 ||
+            file_stat(dirfd(dir), de->d_name, &st, why, sizeof why) != 0)
+            continue;
+        if (n == SCRIPT_LIST_MAX) {
+            more++;
+            continue;
+        }
+        strcpy(list[n].name, de->d_name);
+        list[n].size = (long long)st.st_size;
+        list[n].mtime = (long long)st.st_mtime;
+        n++;
+    }
+    qsort(list, n, sizeof *list, entry_cmp);
+    wsg_web_escape(dir_esc, sizeof dir_esc, web->d->opt.script_dir,
+                   strlen(web->d->opt.script_dir));
+    cap = strlen(dir_esc) + 64 + n * SCRIPT_ENTRY_MAX;
+    json = malloc(cap);
+    if (!json)
+        goto out_oom;
+    used += (size_t)snprintf(json + used, cap - used,
+                             "{\"dir\":\"%s\",\"scripts\":[", dir_esc);
+    /* The names need no escape: name_check let only safe bytes by. */
+    for (i = 0; i < n; i++)
+        used += (size_t)snprintf(
+            json + used, cap - used,
+            "%s{\"name\":\"%s\",\"size\":%lld,\"mtime\":%lld}", i ? "," : "",
+            list[i].name, list[i].size, list[i].mtime);
+    used += (size_t)snprintf(json + used, cap - used, "],\"more\":%lu}",
+                             (unsigned long)more);
+    ret = wsg_web_answer(req->conn, MHD_HTTP_OK, "application/json", json,
+                         used, 0);
+    goto out;
+out_oom:
+    ret = wsg_web_error(req->conn, MHD_HTTP_INTERNAL_SERVER_ERROR,
+                        "out of memory");
+out:
+    free(json);
+    free(list);
+    closedir(dir);
+    return ret;
 }
 
+/* GET: the file as a download (the editor fetches it the same way). */
+static enum MHD_Result file_get(struct wsg_web_req *req, int dfd,
+                                const char *name)
+{
+    char why[256], disp[SCRIPT_NAME_MAX + 32];
+    struct MHD_Response *r = NULL;
+    enum MHD_Result ret;
+    struct stat st;
+    int fd;
+
+    fd = openat(dfd, name, O_RDONLY | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC);
+    if (fd < 0) {
+        snprintf(why, sizeof why, "%s: %s", name, strerror(errno));
+        if (errno == ENOENT)
+            return wsg_web_error(req->conn, MHD_HTTP_NOT_FOUND, why);
+        if (errno == ELOOP)
+            snprintf(why, sizeof why, "%s is a symbolic link: not served",
+                     name);
+        return wsg_web_error(req->conn, MHD_HTTP_FORBIDDEN, why);
+    }
+    if (fstat(fd, &st) < 0 || !S_ISREG(st.st_mode)) {
+        close(fd);
+        snprintf(why, sizeof why, "%s is not a regular file", name);
+        return wsg_web_error(req->conn, MHD_HTTP_FORBIDDEN, why);
+    }
+    /* MHD sends the file from its descriptor and closes it. */
+    r = MHD_create_response_from_fd((uint64_t)st.st_size, fd);
+    if (!r) {
+        close(fd);
+        return MHD_NO;
+    }
+    snprintf(disp, sizeof disp, "attachment; filename=\"%s\"", name);
+    if (MHD_add_response_header(r, MHD_HTTP_HEADER_CONTENT_TYPE,
+                                "text/x-lua; charset=utf-8") != MHD_YES ||
+        MHD_add_response_header(r, MHD_HTTP_HEADER_CONTENT_DISPOSITION,
+                                disp) != MHD_YES ||
+        MHD_add_response_header(r, MHD_HTTP_HEADER_CACHE_CONTROL,
+                                "no-store") != MHD_YES ||
+        MHD_add_response_header(r, "X-Content-Type-Options", "nosniff") !=
+            MHD_YES) {
+        MHD_destroy_response(r);
+        return MHD_NO;
+    }
+    ret = MHD_queue_response(req->conn, MHD_HTTP_OK, r);
+    MHD_destroy_response(r);
+    return ret;
+}
+
+/* The whole of buf to fd: 0 or -errno. */
+static int write_all(int fd, const char *buf, size_t len)
+{
+    ssize_t n;
+
+    while (len) {
+        n = write(fd, buf, len);
+        if (n < 0 && errno == EINTR)
+            continue;
+        if (n < 0)
+            return -errno;
+        buf += n;
+        len -= (size_t)n;
+    }
+    return 0;
+}
+
+/* PUT: the body becomes the file, through a temporary file renamed over
+ * it: 201 made, 200 replaced. */
+static enum MHD_Result file_put(struct wsg_web_req *req, int dfd,
+                                const char *name)
+{
+    char why[256], tmp[SCRIPT_NAME_MAX + 8];
+    struct stat st;
+    unsigned status;
+    int fd, r, existed;
+
+    status = file_stat(dfd, name, &st, why, sizeof why);
+    if (status != 0 && status != MHD_HTTP_NOT_FOUND)
+        return wsg_web_error(req->conn, status, why);
+    existed = status == 0;
+    /* Hidden (no script's name starts with a dot) and one per name: the
+     * loop serves one request at a time, so a file already there is what
+     * a crash left. */
+    snprintf(tmp, sizeof tmp, ".%s.part", name);
+    fd = openat(dfd, tmp, O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC,
+                0644);
+    if (fd < 0 && errno == EEXIST && unlinkat(dfd, tmp, 0) == 0)
+        fd =
+            openat(dfd, tmp,
+                   O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0644);
+    if (fd < 0) {
+        r = -errno;
+        goto fail;
+    }
+    r = write_all(fd, req->body, req->body_len);
+    if (r == 0 && fsync(fd) < 0)
+        r = -errno;
+    if (close(fd) < 0 && r == 0)
+        r = -errno;
+    if (r == 0 && renameat(dfd, tmp, dfd, name) < 0)
+        r = -errno;
+    if (r < 0) {
+        unlinkat(dfd, tmp, 0);
+        goto fail;
+    }
+    return wsg_web_json(req->conn, existed ? MHD_HTTP_OK : MHD_HTTP_CREATED,
+                        "{\"name\":\"%s\",\"size\":%lu,\"created\":%s}", name,
+                        (unsigned long)req->body_len,
+                        existed ? "false" : "true");
+fail:
+    snprintf(why, sizeof why, "%s not saved: %s", name, strerror(-r));
+    return wsg_web_error(req->conn,
+                         r == -ENOSPC || r == -EDQUOT
+                             ? MHD_HTTP_INSUFFICIENT_STORAGE
+                             : MHD_HTTP_INTERNAL_SERVER_ERROR,
+                         why);
+}
+
+/* DELETE: the file (a running script keeps running: it was read at its
+ * start). */
+static enum MHD_Result file_delete(struct wsg_web_req *req, int dfd,
+                                   const char *name)
+{
+    char why[256];
+    struct stat st;
+    unsigned status;
+
+    status = file_stat(dfd, name, &st, why, sizeof why);
+    if (status != 0)
+        return wsg_web_error(req->conn, status, why);
+    if (unlinkat(dfd, name, 0) < 0) {
+        snprintf(why, sizeof why, "%s not deleted: %s", name, strerror(errno));
+        return wsg_web_error(req->conn, MHD_HTTP_INTERNAL_SERVER_ERROR, why);
+    }
+    return wsg_web_json(req->conn, MHD_HTTP_OK, "{\"deleted\":\"%s\"}", name);
+}
+
+/* GET, PUT and DELETE /scripts/NAME. */
 enum MHD_Result wsg_web_serve_script_file(struct wsg_web *web,
                                           struct wsg_web_req *req)
 {
-    (void)web;
-    return wsg_web_error(req->conn, MHD_HTTP_NOT_IMPLEMENTED,
-                         "not yet served");
+    const char *name = req->tail ? req->tail : "";
+    enum MHD_Result ret;
+    char why[256];
+    int dfd;
+
+    /* The name first: a bad one is the client's error whatever the
+     * server's setup. */
+    if (name_check(name, why, sizeof why) < 0)
+        return wsg_web_error(req->conn, MHD_HTTP_BAD_REQUEST, why);
+    dfd = dir_open(web);
+    if (dfd < 0)
+        return dir_error(web, req->conn, dfd);
+    if (req->method == WSG_WEB_PUT)
+        ret = file_put(req, dfd, name);
+    else if (req->method == WSG_WEB_DELETE)
+        ret = file_delete(req, dfd, name);
+    else
+        ret = file_get(req, dfd, name);
+    close(dfd);
+    return ret;
 }
 
+/* POST /script/run, name=NAME: the script host runs DIR/NAME, as the
+ * control channel's `script run DIR/NAME`. */
+static enum MHD_Result script_run(struct wsg_web *web, struct wsg_web_req *req)
+{
+    const char *name = wsg_web_field(req, "name");
+    char why[512], path[PATH_MAX];
+    struct wsg_script *h;
+    struct stat st;
+    unsigned status;
+    int dfd, r;
+
+    if (!name)
+        return wsg_web_error(req->conn, MHD_HTTP_BAD_REQUEST,
+                             "no script: post name=NAME.lua");
+    if (name_check(name, why, sizeof why) < 0)
+        return wsg_web_error(req->conn, MHD_HTTP_BAD_REQUEST, why);
+    dfd = dir_open(web);
+    if (dfd < 0)
+        return dir_error(web, req->conn, dfd);
+    /* The host opens the file by its path: it must be a regular file of
+     * the directory, not a link out of it. */
+    status = file_stat(dfd, name, &st, why, sizeof why);
+    close(dfd);
+    if (status != 0)
+        return wsg_web_error(req->conn, status, why);
+    if ((size_t)snprintf(path, sizeof path, "%s/%s", web->d->opt.script_dir,
+                         name) >= sizeof path)
+        return wsg_web_error(req->conn, MHD_HTTP_INTERNAL_SERVER_ERROR,
+                             "the script's path is too long");
+    if (wsg_gripper_script(web->g, &h) < 0)
+        return wsg_web_error(req->conn, MHD_HTTP_INTERNAL_SERVER_ERROR,
+                             "no memory for a script host");
+    wsg_web_touch(web);
+    r = wsg_script_start(h, path, why, sizeof why);
+    wsg_web_done(web);
+    if (r == -EBUSY)
+        return wsg_web_error(req->conn, MHD_HTTP_CONFLICT,
+                             "a script runs already: stop it first");
+    /* It failed as it started (does not compile, or an error before it
+     * first waits): D20 is set, its error in the state. */
+    if (r < 0)
+        return wsg_web_error(req->conn,
+                             r == -EINVAL ? HTTP_UNPROCESSABLE
+                                          : MHD_HTTP_INTERNAL_SERVER_ERROR,
+                             why);
+    return wsg_web_json(req->conn, MHD_HTTP_OK,
+                        "{\"ok\":true,\"running\":\"%s\"}", name);
+}
+
+/* GET /script/status: the state's "script" object with what does not
+ * fit there: the whole error, the host's state and memory. */
+static enum MHD_Result script_status(struct wsg_web *web,
+                                     struct wsg_web_req *req)
+{
+    char name[2 * PATH_MAX], error[WSG_WEB_ANSWER_MAX];
+    struct wsg_script_status st;
+    struct wsg_script *h;
+    const char *base;
+
+    if (wsg_gripper_script(web->g, &h) < 0)
+        return wsg_web_error(req->conn, MHD_HTTP_INTERNAL_SERVER_ERROR,
+                             "no memory for a script host");
+    wsg_web_touch(web);
+    wsg_script_status(h, &st);
+    wsg_web_done(web);
+    base = st.file ? strrchr(st.file, '/') : NULL;
+    base = base ? base + 1 : st.file;
+    if (base)
+        wsg_web_escape(name, sizeof name, base, strlen(base));
+    if (st.error)
+        wsg_web_escape(error, sizeof error, st.error, strlen(st.error));
+    return wsg_web_json(
+        req->conn, MHD_HTTP_OK,
+        "{\"name\":%s%s%s,\"running\":%s,\"failed\":%s,"
+        "\"error\":%s%s%s,\"memory\":%lu,\"memory_max\":%lu}",
+        base ? "\"" : "", base ? name : "null", base ? "\"" : "",
+        st.running ? "true" : "false", st.failed ? "true" : "false",
+        st.error ? "\"" : "", st.error ? error : "null", st.error ? "\"" : "",
+        (unsigned long)st.memory, (unsigned long)st.memory_max);
+}
+
+/* GET /script/output?from=N: what the script printed from byte N on
+ * (the page's console fills itself from it when opened, then follows
+ * the log's "script print" lines). */
+static enum MHD_Result script_output(struct wsg_web *web,
+                                     struct wsg_web_req *req)
+{
+    const char *from_text = wsg_web_field(req, "from");
+    char text[1024], esc[WSG_WEB_ANSWER_MAX - 128];
+    unsigned long from = 0;
+    struct wsg_script *h;
+    uint64_t start, end;
+    size_t n, took;
+
+    if (from_text && wsg_parse_ulong(from_text, ULONG_MAX, &from) < 0)
+        return wsg_web_error(req->conn, MHD_HTTP_BAD_REQUEST,
+                             "from must be a byte offset");
+    if (wsg_gripper_script(web->g, &h) < 0)
+        return wsg_web_error(req->conn, MHD_HTTP_INTERNAL_SERVER_ERROR,
+                             "no memory for a script host");
+    start = wsg_script_output(h, from, text, sizeof text, &n, &end);
+    /* Escaped in full, or cut: then only the bytes it holds count. */
+    took = n;
+    while (wsg_web_escape(esc, sizeof esc, text, took) == sizeof esc)
+        took /= 2;
+    return wsg_web_json(req->conn, MHD_HTTP_OK,
+                        "{\"from\":%llu,\"text\":\"%s\",\"next\":%llu,"
+                        "\"end\":%llu}",
+                        (unsigned long long)start, esc,
+                        (unsigned long long)(start + took),
+                        (unsigned long long)end);
+}
+
+/* POST /script/run and /script/stop; GET /script/status and
+ * /script/output. */
 enum MHD_Result wsg_web_serve_script_run(struct wsg_web *web,
                                          struct wsg_web_req *req)
 {
-    (void)web;
-    return wsg_web_error(req->conn, MHD_HTTP_NOT_IMPLEMENTED,
-                         "not yet served");
+    const char *verb = req->tail ? req->tail : "";
+    struct wsg_script *h;
+    int r;
+
+    if (req->method == WSG_WEB_GET && strcmp(verb, "status") == 0)
+        return script_status(web, req);
+    if (req->method == WSG_WEB_GET && strcmp(verb, "output") == 0)
+        return script_output(web, req);
+    if (req->method == WSG_WEB_POST && strcmp(verb, "run") == 0)
+        return script_run(web, req);
+    if (req->method == WSG_WEB_POST && strcmp(verb, "stop") == 0) {
+        if (wsg_gripper_script(web->g, &h) < 0)
+            return wsg_web_error(req->conn, MHD_HTTP_INTERNAL_SERVER_ERROR,
+                                 "no memory for a script host");
+        wsg_web_touch(web);
+        r = wsg_script_stop(h);
+        wsg_web_done(web);
+        return wsg_web_json(req->conn, MHD_HTTP_OK,
+                            "{\"ok\":true,\"stopped\":%s}",
+                            r < 0 ? "false" : "true");
+    }
+    return wsg_web_error(req->conn, MHD_HTTP_NOT_FOUND,
+                         "POST /script/run (name=NAME.lua) or /script/stop; "
+                         "GET /script/status or /script/output?from=N");
 }

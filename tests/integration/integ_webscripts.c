@@ -1,0 +1,459 @@
+/*
+ * integ_webscripts: the web page's scripting (--web with --script-dir)
+ * against the real daemon.
+ *
+ * - files: a script uploaded (PUT: 201, again 200) is listed with its size
+ *   (GET /scripts.json, sorted by name), downloaded as it was (GET, with
+ *   Content-Disposition: attachment) and deleted (DELETE; then 404); no
+ *   temporary file is left in the directory;
+ * - names: ../x.lua, a/b.lua, %2e%2e%2fx.lua, .hidden.lua, x.txt and a
+ *   name of 65 characters are refused (400) and nothing is written outside
+ *   the directory; a symbolic link planted in the directory, pointing
+ *   outside, is neither read, written, deleted nor run (403), and the file
+ *   it points to is unchanged;
+ * - caps: 256 KiB is taken, a Content-Length of one byte more refused
+ *   (413) before the body is sent;
+ * - run: a script uploaded and run from the page (POST /script/run)
+ *   registers its own command ID and answers it over TCP; the state shows
+ *   it running (D19, "script"); what it prints comes in the event
+ *   stream's log events; a second run while it runs is 409; POST
+ *   /script/stop stops it (D19 cleared, its ID E_CMD_UNKNOWN again);
+ * - failure: a script that raises an error shows the error and D20 in the
+ *   state (and GET /script/status); one that does not compile is 422;
+ * - without --script-dir every endpoint says so (409, naming the option).
+ *
+ * Built without libmicrohttpd (WSG_TEST_HAVE_WEB 0) it is skipped.
+ */
+#define _GNU_SOURCE /* mkdtemp, symlink, lstat */
+
+#include "check.h"
+#include "emu.h"
+#include "emu_http.h"
+
+#include <arpa/inet.h>
+#include <dirent.h>
+#include <errno.h>
+#include <netinet/in.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/socket.h>
+#include <sys/stat.h>
+#include <sys/time.h>
+#include <unistd.h>
+
+#ifndef WSG_TEST_HAVE_WEB
+#define WSG_TEST_HAVE_WEB 0
+#endif
+
+/* The upload cap (WSG_WEB_UPLOAD_MAX). */
+#define UPLOAD_MAX (256 * 1024)
+/* Room for one event's name and data (a log event is up to 16 KiB). */
+#define EV_MAX 20000
+/* The IDs the test's scripts register. */
+#define ID_PING 0xB5
+#define ID_FAIL 0xB6
+/* How long a script's effect may take to show in the state: a bound
+ * (the machine may be loaded), not an expectation. */
+#define STATE_WAIT_MS emu_ms(10000)
+
+/* Answers ID_PING with E_SUCCESS and "pong", after printing a line. */
+static const char ping_lua[] = "-- ping.lua: answers B5h\n"
+                               "cmd.register(0xB5)\n"
+                               "print(\"hello from the web\")\n"
+                               "while true do\n"
+                               "  local id = cmd.read()\n"
+                               "  cmd.send(id, etob(E_SUCCESS), \"pong\")\n"
+                               "end\n";
+/* Fails at its first packet. */
+static const char fail_lua[] = "cmd.register(0xB6)\n"
+                               "cmd.read()\n"
+                               "error(\"asked to fail\")\n";
+
+static char dir[256];     /* the script directory */
+static char outside[256]; /* beside it, outside */
+static char web[64];
+static struct http_answer ans;
+
+static int req(const char *method, const char *path, const char *body)
+{
+    if (http_request(web, method, path, NULL, body, &ans, EMU_REPLY_MS) < 0)
+        return -1;
+    return ans.status;
+}
+
+/* A form POST. */
+static int post(const char *path, const char *form)
+{
+    static const char type[] =
+        "Content-Type: application/x-www-form-urlencoded\r\n";
+
+    if (http_request(web, "POST", path, type, form, &ans, EMU_REPLY_MS) < 0)
+        return -1;
+    return ans.status;
+}
+
+static int exists(const char *path)
+{
+    struct stat st;
+
+    return lstat(path, &st) == 0;
+}
+
+/* The state (GET /state.json) until it contains want (or, with
+ * absent, no longer contains it): 1, or 0 after STATE_WAIT_MS. */
+static int state_until(const char *want, int absent)
+{
+    double end = emu_now_ms() + STATE_WAIT_MS;
+
+    do {
+        if (req("GET", "/state.json", NULL) == 200 &&
+            (strstr(ans.body, want) != NULL) != absent)
+            return 1;
+        emu_sleep_ms(20);
+    } while (emu_now_ms() < end);
+    fprintf(stderr, "state: %s\nwanted %s%s\n", ans.body, absent ? "no " : "",
+            want);
+    return 0;
+}
+
+/* Entries of the script directory but "." and "..". */
+static int dir_entries(void)
+{
+    struct dirent *de;
+    DIR *d = opendir(dir);
+    int n = 0;
+
+    if (!d)
+        return -1;
+    while ((de = readdir(d)) != NULL)
+        if (strcmp(de->d_name, ".") != 0 && strcmp(de->d_name, "..") != 0)
+            n++;
+    closedir(d);
+    return n;
+}
+
+static void test_files(void)
+{
+    char v[128];
+
+    CHECK_EQ(req("GET", "/scripts.json", NULL), 200);
+    CHECK(strstr(ans.body, "\"scripts\":[]") != NULL);
+    CHECK_EQ(req("PUT", "/scripts/ping.lua", ping_lua), 201);
+    CHECK_EQ(req("PUT", "/scripts/b-2_x.lua", "-- b\n"), 201);
+    CHECK_EQ(req("PUT", "/scripts/b-2_x.lua", "-- b again\n"), 200);
+    CHECK_EQ(req("PUT", "/scripts/a.lua", ""), 201);
+    CHECK_EQ(req("GET", "/scripts.json", NULL), 200);
+    /* Sorted by name, with their sizes. */
+    {
+        const char *a = strstr(ans.body, "{\"name\":\"a.lua\",\"size\":0,");
+        const char *b =
+            strstr(ans.body, "{\"name\":\"b-2_x.lua\",\"size\":11,");
+        char want[64];
+        const char *p;
+
+        snprintf(want, sizeof want, "{\"name\":\"ping.lua\",\"size\":%u,",
+                 (unsigned)strlen(ping_lua));
+        p = strstr(ans.body, want);
+        CHECK(a && b && p && a < b && b < p);
+        CHECK(strstr(ans.body, "\"mtime\":") != NULL);
+        if (!(a && b && p))
+            fprintf(stderr, "list: %s\n", ans.body);
+    }
+    CHECK_EQ(req("GET", "/scripts/ping.lua", NULL), 200);
+    CHECK(strcmp(ans.body, ping_lua) == 0);
+    CHECK(http_header(&ans, "Content-Disposition", v, sizeof v) &&
+          strcmp(v, "attachment; filename=\"ping.lua\"") == 0);
+    CHECK_EQ(req("DELETE", "/scripts/b-2_x.lua", NULL), 200);
+    CHECK_EQ(req("GET", "/scripts/b-2_x.lua", NULL), 404);
+    CHECK_EQ(req("DELETE", "/scripts/b-2_x.lua", NULL), 404);
+    CHECK_EQ(req("DELETE", "/scripts/a.lua", NULL), 200);
+    /* ping.lua alone: no temporary file left. */
+    CHECK_EQ(dir_entries(), 1);
+}
+
+static void test_names(void)
+{
+    static const char *const bad[] = {
+        "/scripts/../x.lua",
+        "/scripts/a/b.lua",
+        "/scripts/%2e%2e%2fx.lua",
+        "/scripts/..%2fx.lua",
+        "/scripts/.hidden.lua",
+        "/scripts/x.txt",
+        "/scripts/x.lua.txt",
+        "/scripts/.lua",
+        "/scripts/",
+        "/scripts/a%20b.lua",
+        "/scripts/"
+        "a123456789012345678901234567890123456789012345678901234567890.lua",
+    };
+    char path[512], link[512], parent_x[512];
+    size_t i;
+    FILE *f;
+
+    for (i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+        CHECK_EQ(req("PUT", bad[i], "print('out')\n"), 400);
+        if (ans.status != 400)
+            fprintf(stderr, "PUT %s: %d %s\n", bad[i], ans.status, ans.body);
+        CHECK(strstr(ans.body, "\"error\":\"") != NULL);
+        CHECK_EQ(req("GET", bad[i], NULL), 400);
+        CHECK_EQ(req("DELETE", bad[i], NULL), 400);
+    }
+    /* 64 characters are fine. */
+    CHECK_EQ(req("PUT",
+                 "/scripts/"
+                 "a12345678901234567890123456789012345678901234567890123456789"
+                 ".lua",
+                 "\n"),
+             201);
+    CHECK_EQ(req("DELETE",
+                 "/scripts/"
+                 "a12345678901234567890123456789012345678901234567890123456789"
+                 ".lua",
+                 NULL),
+             200);
+    snprintf(parent_x, sizeof parent_x, "%s/../x.lua", dir);
+    CHECK(!exists(parent_x));
+    CHECK(!exists("x.lua"));
+    CHECK_EQ(post("/script/run", "name=../x.lua"), 400);
+    CHECK_EQ(post("/script/run", "name=nothing.lua"), 404);
+
+    /* A link planted in the directory, to a file outside it. */
+    f = fopen(outside, "w");
+    REQUIRE(f != NULL);
+    fputs("secret\n", f);
+    fclose(f);
+    snprintf(link, sizeof link, "%s/link.lua", dir);
+    REQUIRE(symlink(outside, link) == 0);
+    CHECK_EQ(req("GET", "/scripts/link.lua", NULL), 403);
+    CHECK(strstr(ans.body, "secret") == NULL);
+    CHECK_EQ(req("PUT", "/scripts/link.lua", "print('overwritten')\n"), 403);
+    CHECK_EQ(req("DELETE", "/scripts/link.lua", NULL), 403);
+    CHECK_EQ(post("/script/run", "name=link.lua"), 403);
+    CHECK_EQ(req("GET", "/scripts.json", NULL), 200);
+    CHECK(strstr(ans.body, "link.lua") == NULL);
+    f = fopen(outside, "r");
+    REQUIRE(f != NULL);
+    CHECK(fgets(path, sizeof path, f) && strcmp(path, "secret\n") == 0);
+    fclose(f);
+    CHECK(exists(link));
+    unlink(link);
+}
+
+/* A request head alone, with a Content-Length: the status the daemon
+ * answers before any of the body is sent. */
+static int head_only(const char *method, const char *path, size_t length)
+{
+    char head[512], buf[4096];
+    struct sockaddr_in sa;
+    size_t got = 0;
+    double end = emu_now_ms() + EMU_REPLY_MS;
+    int fd, n, status = -1;
+    const char *colon = strrchr(web, ':');
+
+    memset(&sa, 0, sizeof sa);
+    sa.sin_family = AF_INET;
+    sa.sin_port = htons((uint16_t)atoi(colon + 1));
+    sa.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    fd = socket(AF_INET, SOCK_STREAM, 0);
+    if (fd < 0 || connect(fd, (struct sockaddr *)&sa, sizeof sa) < 0) {
+        if (fd >= 0)
+            close(fd);
+        return -1;
+    }
+    n = snprintf(head, sizeof head,
+                 "%s %s HTTP/1.1\r\nHost: %s\r\nConnection: close\r\n"
+                 "Content-Length: %zu\r\n\r\n",
+                 method, path, web, length);
+    if (send(fd, head, (size_t)n, MSG_NOSIGNAL) != n)
+        goto out;
+    while (got < sizeof buf - 1 && emu_now_ms() < end) {
+        struct timeval tv = {0, 100000};
+        ssize_t r;
+
+        setsockopt(fd, SOL_SOCKET, SO_RCVTIMEO, &tv, sizeof tv);
+        r = recv(fd, buf + got, sizeof buf - 1 - got, 0);
+        if (r == 0)
+            break;
+        if (r < 0 && (errno == EAGAIN || errno == EWOULDBLOCK)) {
+            buf[got] = '\0';
+            if (strstr(buf, "\r\n\r\n"))
+                break;
+            continue;
+        }
+        if (r < 0)
+            break;
+        got += (size_t)r;
+    }
+    buf[got] = '\0';
+    if (sscanf(buf, "HTTP/1.%*d %d", &status) != 1)
+        status = -1;
+out:
+    close(fd);
+    return status;
+}
+
+static void test_caps(void)
+{
+    char *big = malloc(UPLOAD_MAX + 1);
+    char name[512];
+
+    REQUIRE(big != NULL);
+    memset(big, '-', UPLOAD_MAX);
+    big[UPLOAD_MAX] = '\0';
+    CHECK_EQ(req("PUT", "/scripts/big.lua", big), 201);
+    CHECK_EQ(req("GET", "/scripts.json", NULL), 200);
+    CHECK(strstr(ans.body, "{\"name\":\"big.lua\",\"size\":262144,") != NULL);
+    CHECK_EQ(req("DELETE", "/scripts/big.lua", NULL), 200);
+    CHECK_EQ(head_only("PUT", "/scripts/big.lua", UPLOAD_MAX + 1), 413);
+    snprintf(name, sizeof name, "%s/big.lua", dir);
+    CHECK(!exists(name));
+    free(big);
+}
+
+/* A log event with a line containing want within timeout_ms: 1, or 0. */
+static int log_until(struct http_stream *s, const char *want, int timeout_ms)
+{
+    static char data[EV_MAX];
+    double end = emu_now_ms() + timeout_ms, left;
+    char name[64];
+    int r;
+
+    for (;;) {
+        left = end - emu_now_ms();
+        if (left <= 0)
+            return 0;
+        r = http_stream_event(s, name, sizeof name, data, sizeof data,
+                              (int)left);
+        if (r != 1)
+            return 0;
+        if (strcmp(name, "log") == 0 && strstr(data, want))
+            return 1;
+    }
+}
+
+static void test_run(struct emu *e)
+{
+    static struct http_stream s;
+    struct wsg_client_frame f;
+    struct emu_client c;
+
+    REQUIRE(emu_open(&c, e, &emu_tcp) == 0);
+    CHECK_EQ(emu_request(&c, ID_PING, NULL, 0, NULL, EMU_REPLY_MS),
+             WSG_E_CMD_UNKNOWN);
+    /* The log is fed while a stream is open. */
+    REQUIRE(http_stream_open(&s, web, "/events", EMU_REPLY_MS) == 0);
+    CHECK_EQ(s.status, 200);
+
+    CHECK_EQ(post("/script/run", "name=ping.lua"), 200);
+    CHECK(log_until(&s, " script print hello from the web", STATE_WAIT_MS));
+    CHECK_EQ(emu_request(&c, ID_PING, NULL, 0, &f, EMU_REPLY_MS),
+             WSG_E_SUCCESS);
+    CHECK(EMU_NPARAMS(&f) == 4 && memcmp(EMU_PARAMS(&f), "pong", 4) == 0);
+    CHECK(state_until("\"script\":{\"name\":\"ping.lua\",\"running\":true,"
+                      "\"error\":null}",
+                      0));
+    CHECK(strstr(ans.body, "\"script_running\"") != NULL);
+    CHECK_EQ(req("GET", "/script/status", NULL), 200);
+    CHECK(strstr(ans.body, "\"running\":true") != NULL);
+    CHECK_EQ(post("/script/run", "name=ping.lua"), 409);
+
+    CHECK_EQ(post("/script/stop", ""), 200);
+    CHECK(strstr(ans.body, "\"stopped\":true") != NULL);
+    CHECK(state_until("\"script_running\"", 1));
+    CHECK(strstr(ans.body, "\"running\":false") != NULL);
+    CHECK_EQ(emu_request(&c, ID_PING, NULL, 0, NULL, EMU_REPLY_MS),
+             WSG_E_CMD_UNKNOWN);
+    CHECK_EQ(post("/script/stop", ""), 200);
+    CHECK(strstr(ans.body, "\"stopped\":false") != NULL);
+
+    /* A runtime error: its message and D20 in the state. */
+    CHECK_EQ(req("PUT", "/scripts/fail.lua", fail_lua), 201);
+    CHECK_EQ(post("/script/run", "name=fail.lua"), 200);
+    CHECK(state_until("\"script_running\"", 0));
+    CHECK_EQ(emu_send(&c, ID_FAIL, NULL, 0), 0);
+    CHECK(state_until("\"script_failure\"", 0));
+    CHECK(strstr(ans.body, "\"name\":\"fail.lua\",\"running\":false,"
+                           "\"error\":\"") != NULL);
+    CHECK(strstr(ans.body, "asked to fail") != NULL);
+    CHECK(strstr(ans.body, "\"script_running\"") == NULL);
+    CHECK(log_until(&s, "asked to fail", STATE_WAIT_MS));
+    CHECK_EQ(req("GET", "/script/status", NULL), 200);
+    CHECK(strstr(ans.body, "\"failed\":true") != NULL);
+    CHECK(strstr(ans.body, "asked to fail") != NULL);
+
+    /* One that does not compile: 422 with Lua's message; D20. */
+    CHECK_EQ(req("PUT", "/scripts/syntax.lua", "this is not lua\n"), 201);
+    CHECK_EQ(post("/script/run", "name=syntax.lua"), 422);
+    CHECK(strstr(ans.body, "syntax.lua") != NULL);
+    CHECK(state_until("\"script_failure\"", 0));
+
+    /* The next start clears D20. */
+    CHECK_EQ(post("/script/run", "name=ping.lua"), 200);
+    CHECK(state_until("\"script_failure\"", 1));
+    CHECK_EQ(post("/script/stop", ""), 200);
+
+    http_stream_close(&s);
+    emu_close(&c);
+}
+
+/* A daemon without --script-dir: every endpoint says what is missing. */
+static void test_no_dir(const char *exe)
+{
+    static const char *const args[] = {"--tcp", "127.0.0.1:0", "--web",
+                                       "127.0.0.1:0", NULL};
+    struct emu e;
+
+    REQUIRE(emu_start(&e, exe, args) == 0);
+    REQUIRE(emu_field(&e, "web", web, sizeof web) != NULL);
+    CHECK_EQ(req("GET", "/scripts.json", NULL), 409);
+    CHECK(strstr(ans.body, "--script-dir DIR") != NULL);
+    CHECK_EQ(req("PUT", "/scripts/a.lua", "print(1)\n"), 409);
+    CHECK(strstr(ans.body, "--script-dir DIR") != NULL);
+    CHECK_EQ(req("GET", "/scripts/a.lua", NULL), 409);
+    CHECK_EQ(req("DELETE", "/scripts/a.lua", NULL), 409);
+    CHECK_EQ(post("/script/run", "name=a.lua"), 409);
+    CHECK(strstr(ans.body, "--script-dir DIR") != NULL);
+    /* A bad name is the client's error still. */
+    CHECK_EQ(req("PUT", "/scripts/x.txt", "print(1)\n"), 400);
+    CHECK_EQ(emu_stop(&e), 0);
+}
+
+int main(int argc, char **argv)
+{
+    const char *exe = emu_exe(argc, argv);
+    const char *args[] = {"--tcp",       "127.0.0.1:0",  "--web",
+                          "127.0.0.1:0", "--script-dir", dir,
+                          NULL};
+    char top[] = "/tmp/wsgemu-webscripts.XXXXXX", path[512];
+    struct emu e;
+
+    if (!WSG_TEST_HAVE_WEB)
+        test_skip("wsgemu was built without libmicrohttpd");
+    REQUIRE(mkdtemp(top) != NULL);
+    snprintf(dir, sizeof dir, "%s/user", top);
+    snprintf(outside, sizeof outside, "%s/outside.lua", top);
+    REQUIRE(mkdir(dir, 0755) == 0);
+
+    REQUIRE(emu_start(&e, exe, args) == 0);
+    REQUIRE(emu_field(&e, "web", web, sizeof web) != NULL);
+    test_files();
+    test_names();
+    test_caps();
+    test_run(&e);
+    CHECK_EQ(emu_stop(&e), 0);
+    test_no_dir(exe);
+
+    /* Only what the test made. */
+    snprintf(path, sizeof path, "%s/ping.lua", dir);
+    unlink(path);
+    snprintf(path, sizeof path, "%s/fail.lua", dir);
+    unlink(path);
+    snprintf(path, sizeof path, "%s/syntax.lua", dir);
+    unlink(path);
+    unlink(outside);
+    CHECK_EQ(rmdir(dir), 0);
+    CHECK_EQ(rmdir(top), 0);
+    TEST_EXIT();
+}
