@@ -59,12 +59,19 @@
     'pull-back ', num('motion-pullback', 10, 'mm', { min: 0 }),
     ' speed ', num('motion-release-speed', 50, 'mm/s', { min: 0 }),
     ' ', button('motion-release', 'Release'));
-  const other = el('div', { className: 'buttons' },
+  const other = el('div', { className: 'actions' },
     button('motion-home', 'Home'), button('motion-stop', 'Stop'));
 
+  /* Where the fingers are while they move, without leaving the tab. */
+  const live = el('p', { id: 'motion-live', className: 'live' });
+  wsg.on('state', (s) => {
+    live.textContent = 'Width ' + s.width.toFixed(1) + ' mm, speed ' +
+      s.speed.toFixed(1) + ' mm/s, force ' + s.force.toFixed(1) + ' N';
+  });
+
   answer.setAttribute('aria-live', 'polite');
-  tab.append(el('h2', { textContent: 'Motion' }), move, jog, grasp, release,
-    other, answer);
+  tab.append(el('h2', { textContent: 'Motion' }), live, move, jog, grasp,
+    release, other, answer);
 
   function on(id, fn) {
     document.getElementById(id).addEventListener('click', fn);

@@ -32,7 +32,7 @@
 
   message.setAttribute('aria-live', 'polite');
   fields.append(el('legend', { textContent: 'Gripper settings' }));
-  form.append(fields, el('div', { className: 'buttons' }, apply, save),
+  form.append(fields, el('div', { className: 'actions' }, apply, save),
     message);
   tab.append(el('h2', { textContent: 'Settings' }), config, form);
 

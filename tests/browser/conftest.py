@@ -33,7 +33,8 @@ def emu(tmp_path):
     scripts.mkdir()
     config = tmp_path / "wsgemu.conf"
     config.write_text("# the browser tests' config\n")
-    e = Emulator(args=["--web", "127.0.0.1:0", "--config", str(config)])
+    e = Emulator(args=["--web", "127.0.0.1:0", "--config", str(config),
+                       "--script-dir", str(scripts)])
     e.scripts = scripts
     e.config = config
     e.start()
