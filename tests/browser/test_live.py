@@ -95,5 +95,12 @@ def test_screenshot(emu, page):
     emu.control.part(40.0)
     g.grasp(40.0, 50.0)
     wait(page).until(lambda d: text(d, "grasp") == "Holding")
-    ARTIFACTS.mkdir(parents=True, exist_ok=True)
-    assert page.save_screenshot(str(ARTIFACTS / "web-page.png"))
+    # Tall enough for the log; the plot has drawn the grasp by then.
+    size = page.get_window_size()
+    page.set_window_size(1280, 1400)
+    try:
+        wait(page).until(lambda d: "out 25h Grasp E_SUCCESS" in text(d, "log"))
+        ARTIFACTS.mkdir(parents=True, exist_ok=True)
+        assert page.save_screenshot(str(ARTIFACTS / "web-page.png"))
+    finally:
+        page.set_window_size(size["width"], size["height"])
