@@ -1031,3 +1031,21 @@ int emu_start_multi(struct emu *e, const char *exe,
         }
     return 0;
 }
+
+void emu_temp_file(char *path, size_t cap, const char *tag, const char *text)
+{
+    const char *dir = getenv("TMPDIR");
+    FILE *f = NULL;
+    int fd;
+
+    snprintf(path, cap, "%s/wsgemu-%s-XXXXXX", dir ? dir : "/tmp", tag);
+    fd = mkstemp(path);
+    if (fd >= 0)
+        f = fdopen(fd, "w");
+    if (!f || fputs(text, f) == EOF || fclose(f) != 0) {
+        /* Without its file the test cannot go on (as REQUIRE ends it). */
+        fprintf(stderr, "emu: cannot write the temporary file %s: %s\n", path,
+                strerror(errno));
+        exit(1);
+    }
+}

@@ -212,6 +212,10 @@ int emu_sync(struct emu_client *c, int timeout_ms);
 /* The whole file at path into buf (NUL-terminated, at most cap - 1
  * bytes): its length, or -1 when it cannot be opened. */
 long emu_slurp(const char *path, char *buf, size_t cap);
+/* A new temporary file (in $TMPDIR, else /tmp) named after tag, holding
+ * text; path gets its name. Ends the test (exit 1) when it cannot be
+ * written. */
+void emu_temp_file(char *path, size_t cap, const char *tag, const char *text);
 
 /* ---- gripper helpers (requests with an empty payload) ---- */
 

@@ -442,22 +442,6 @@ static void test_zero(const char *value)
     CHECK_EQ(emu_stop(&e), 0);
 }
 
-/* A temporary file with text; path gets its name. */
-static void write_file(char *path, size_t cap, const char *text)
-{
-    const char *dir = getenv("TMPDIR");
-    FILE *f;
-    int fd;
-
-    snprintf(path, cap, "%s/wsgemu-latency-XXXXXX", dir ? dir : "/tmp");
-    fd = mkstemp(path);
-    REQUIRE(fd >= 0);
-    f = fdopen(fd, "w");
-    REQUIRE(f != NULL);
-    fputs(text, f);
-    fclose(f);
-}
-
 static void test_config(void)
 {
     char path[512];
@@ -467,7 +451,8 @@ static void test_config(void)
     struct ctl k;
     struct wsg_client_frame f;
 
-    write_file(path, sizeof path, "# answer late\nlatency = 2\n");
+    emu_temp_file(path, sizeof path, "latency",
+                  "# answer late\nlatency = 2\n");
     start(&e, args);
     REQUIRE(ctl_open(&k, &e) == 0);
     REQUIRE(emu_open(&c, &e, &emu_tcp) == 0);
@@ -528,7 +513,7 @@ static void test_bad_values(void)
 
         bad(a, "MS[:JITTER]");
     }
-    write_file(path, sizeof path, "latency = 5:x\n");
+    emu_temp_file(path, sizeof path, "latency", "latency = 5:x\n");
     bad(args, ":1: latency:");
     unlink(path);
 }

@@ -34,22 +34,6 @@
 
 static const char *exe;
 
-/* A temporary file with text; path gets its name. */
-static void write_file(char *path, size_t cap, const char *text)
-{
-    const char *dir = getenv("TMPDIR");
-    FILE *f;
-    int fd;
-
-    snprintf(path, cap, "%s/wsgemu-settings-XXXXXX", dir ? dir : "/tmp");
-    fd = mkstemp(path);
-    REQUIRE(fd >= 0);
-    f = fdopen(fd, "w");
-    REQUIRE(f != NULL);
-    fputs(text, f);
-    fclose(f);
-}
-
 static float get_float(struct emu_client *c, uint8_t id)
 {
     float v = -1.0f;
@@ -166,7 +150,8 @@ static void test_force_sensor(void)
     const char *b[] = {"--tcp", "127.0.0.1:0", "--config", path, NULL};
 
     check_force_sensor(a);
-    write_file(path, sizeof path, "part = 40\nforce-sensor = on\n");
+    emu_temp_file(path, sizeof path, "settings",
+                  "part = 40\nforce-sensor = on\n");
     check_force_sensor(b);
     unlink(path);
 }
@@ -214,19 +199,19 @@ static void test_config(void)
     const char *g1[] = {"--config", path, NULL};
     const char *g2[] = {"--config", path2, NULL};
 
-    write_file(path, sizeof path,
-               "# settings of integ_settings\n"
-               "\n"
-               "tcp = 127.0.0.1:0\n"
-               "  acceleration=200  \n"
-               "force-limit = 30\n"
-               "serial = 1234\n"
-               "tag = cell 4\n"
-               "homing-direction = negative\n"
-               "no-crc = off\n"
-               "time-scale = 1\n");
-    write_file(path2, sizeof path2,
-               "tcp = 127.0.0.1:0\nmodel = wsg32\npart = 40:50\n");
+    emu_temp_file(path, sizeof path, "settings",
+                  "# settings of integ_settings\n"
+                  "\n"
+                  "tcp = 127.0.0.1:0\n"
+                  "  acceleration=200  \n"
+                  "force-limit = 30\n"
+                  "serial = 1234\n"
+                  "tag = cell 4\n"
+                  "homing-direction = negative\n"
+                  "no-crc = off\n"
+                  "time-scale = 1\n");
+    emu_temp_file(path2, sizeof path2, "settings",
+                  "tcp = 127.0.0.1:0\nmodel = wsg32\npart = 40:50\n");
     check_group1(g1);
     check_group2(g2);
     unlink(path);
@@ -242,8 +227,8 @@ static void test_override(void)
     const char *const *runs[] = {after, before};
     size_t i;
 
-    write_file(path, sizeof path,
-               "tcp = 127.0.0.1:0\nacceleration = 200\nno-crc = on\n");
+    emu_temp_file(path, sizeof path, "settings",
+                  "tcp = 127.0.0.1:0\nacceleration = 200\nno-crc = on\n");
     for (i = 0; i < 2; i++) {
         struct emu e;
         struct emu_client c;
@@ -359,7 +344,7 @@ static void bad_file(const char *text, const char *want_suffix)
     char path[256], want[320];
     const char *args[] = {"--config", path, NULL};
 
-    write_file(path, sizeof path, text);
+    emu_temp_file(path, sizeof path, "settings", text);
     snprintf(want, sizeof want, "%s:%s", path, want_suffix);
     bad(args, want);
     unlink(path);

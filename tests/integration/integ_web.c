@@ -61,10 +61,11 @@ static int get(const char *method, const char *path, const char *headers,
     return ans.status;
 }
 
-/* A state event within timeout_ms: 1 (its JSON in data), 0 none, -1 the
- * stream ended. The communication log's events ("log") are passed over;
- * events of another name fail the check. */
-static int next_state(struct http_stream *s, char *data, int timeout_ms)
+/* The next event named want within timeout_ms: 1 (its data in data), 0
+ * none, -1 the stream ended. Events of the other kind ("state" or "log")
+ * are passed over; one of another name fails the check. */
+static int next_event(struct http_stream *s, const char *want, char *data,
+                      int timeout_ms)
 {
     char name[64];
     double end = emu_now_ms() + timeout_ms, left;
@@ -74,12 +75,15 @@ static int next_state(struct http_stream *s, char *data, int timeout_ms)
         left = end - emu_now_ms();
         r = http_stream_event(s, name, sizeof name, data, EV_MAX,
                               left > 0 ? (int)left : 0);
-        if (r != 1 || strcmp(name, "log") != 0)
-            break;
+        if (r != 1 || strcmp(name, want) == 0)
+            return r;
+        CHECK(strcmp(name, "state") == 0 || strcmp(name, "log") == 0);
     }
-    if (r == 1)
-        CHECK(strcmp(name, "state") == 0);
-    return r;
+}
+
+static int next_state(struct http_stream *s, char *data, int timeout_ms)
+{
+    return next_event(s, "state", data, timeout_ms);
 }
 
 static int has_flag(const char *json, const char *name)
@@ -288,23 +292,10 @@ static void test_stop_ack(struct emu_client *c, struct ctl *k,
     CHECK(!has_flag(data, "fast_stop"));
 }
 
-/* The next "log" event's lines within timeout_ms (state events passed
- * over): 1, or 0 none. */
+/* The next "log" event's lines within timeout_ms: 1, or 0 none. */
 static int next_log(struct http_stream *s, char *data, int timeout_ms)
 {
-    char name[64];
-    double end = emu_now_ms() + timeout_ms, left;
-    int r;
-
-    for (;;) {
-        left = end - emu_now_ms();
-        r = http_stream_event(s, name, sizeof name, data, EV_MAX,
-                              left > 0 ? (int)left : 0);
-        if (r != 1)
-            return 0;
-        if (strcmp(name, "log") == 0)
-            return 1;
-    }
+    return next_event(s, "log", data, timeout_ms) == 1;
 }
 
 /* Wait for log lines containing a and then b (in one event or two); 1

@@ -77,27 +77,20 @@ static double setting(const char *json, const char *name)
     return strtod(v, NULL);
 }
 
+/* The fingers come to rest with the width within lo..hi. */
+static void wait_settled(struct emu_client *c, float lo, float hi)
+{
+    CHECK_EQ(emu_wait_float(c, WSG_CMD_GET_WIDTH, lo, hi, EMU_MOVE_MS, NULL),
+             0);
+    CHECK_EQ(emu_wait_flags(c, WSG_SF_MOVING, 0, EMU_MOVE_MS, NULL), 0);
+}
+
 static float get_float(struct emu_client *c, uint8_t id)
 {
     float v = -1.0f;
 
     CHECK_EQ(emu_get_float(c, id, &v), 0);
     return v;
-}
-
-static void write_file(char *path, size_t cap, const char *text)
-{
-    const char *dir = getenv("TMPDIR");
-    FILE *f;
-    int fd;
-
-    snprintf(path, cap, "%s/wsgemu-webforms-XXXXXX", dir ? dir : "/tmp");
-    fd = mkstemp(path);
-    REQUIRE(fd >= 0);
-    f = fdopen(fd, "w");
-    REQUIRE(f != NULL);
-    fputs(text, f);
-    fclose(f);
 }
 
 static void start(struct emu *e, const char *config)
@@ -259,15 +252,9 @@ static void test_motion(struct emu_client *c, struct ctl *k)
     CHECK(has("\"status\":\"E_CMD_PENDING\""));
     CHECK_EQ(motion("action=move&width=30&speed=200"), 409);
     CHECK(has("\"status\":\"E_ALREADY_RUNNING\""));
-    CHECK_EQ(
-        emu_wait_float(c, WSG_CMD_GET_WIDTH, 29.9f, 30.1f, EMU_MOVE_MS, NULL),
-        0);
-    CHECK_EQ(emu_wait_flags(c, WSG_SF_MOVING, 0, EMU_MOVE_MS, NULL), 0);
+    wait_settled(c, 29.9f, 30.1f);
     CHECK_EQ(motion("action=jog&step=-5&speed=100"), 202);
-    CHECK_EQ(
-        emu_wait_float(c, WSG_CMD_GET_WIDTH, 24.9f, 25.1f, EMU_MOVE_MS, NULL),
-        0);
-    CHECK_EQ(emu_wait_flags(c, WSG_SF_MOVING, 0, EMU_MOVE_MS, NULL), 0);
+    wait_settled(c, 24.9f, 25.1f);
 
     /* Grasp a part with a force limit of its own, release it. */
     CMD_OK(k, "part 20");
@@ -283,10 +270,7 @@ static void test_motion(struct emu_client *c, struct ctl *k)
     }
     CHECK_EQ(motion("action=release&pullback=10&speed=100"), 202);
     CHECK(has("\"command\":\"26h\""));
-    CHECK_EQ(
-        emu_wait_float(c, WSG_CMD_GET_WIDTH, 28.0f, 31.0f, EMU_MOVE_MS, NULL),
-        0);
-    CHECK_EQ(emu_wait_flags(c, WSG_SF_MOVING, 0, EMU_MOVE_MS, NULL), 0);
+    wait_settled(c, 28.0f, 31.0f);
     CMD_OK(k, "part none");
 
     /* Stop a slow move. */
@@ -304,10 +288,7 @@ static void test_forms(struct emu_client *c)
                   "1334=2500&1341=50&1348=1&sender_id=1221&event_type=0"),
              202);
     CHECK(has("\"action\":\"move\""));
-    CHECK_EQ(
-        emu_wait_float(c, WSG_CMD_GET_WIDTH, 39.9f, 40.1f, EMU_MOVE_MS, NULL),
-        0);
-    CHECK_EQ(emu_wait_flags(c, WSG_SF_MOVING, 0, EMU_MOVE_MS, NULL), 0);
+    wait_settled(c, 39.9f, 40.1f);
     /* The move alone: the configuration fields it carried are not taken. */
     CHECK_NEAR(get_float(c, WSG_CMD_GET_ACCELERATION), 250.0, 1e-3);
     CHECK_EQ(post("/motion.json",
@@ -381,8 +362,9 @@ int main(int argc, char **argv)
     exe = emu_exe(argc, argv);
     if (!WSG_TEST_HAVE_WEB)
         test_skip("wsgemu was built without libmicrohttpd");
-    write_file(config, sizeof config,
-               "# cell 4\nacceleration = 200\nno-crc = off\nmodel = wsg50\n");
+    emu_temp_file(
+        config, sizeof config, "webforms",
+        "# cell 4\nacceleration = 200\nno-crc = off\nmodel = wsg50\n");
     start(&e, config);
     REQUIRE(ctl_open(&k, &e) == 0);
     REQUIRE(emu_open(&c, &e, &emu_tcp) == 0);
