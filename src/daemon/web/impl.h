@@ -148,6 +148,15 @@ size_t wsg_web_escape(char *buf, size_t cap, const char *s, size_t len);
 void wsg_web_touch(struct wsg_web *web);
 void wsg_web_done(struct wsg_web *web);
 
+/* ---- files (files.c) ---- */
+
+/* Replace the file name (relative to dfd, or AT_FDCWD) with len bytes of
+ * buf, through the temporary file tmp beside it: written, synced and
+ * renamed over it; links are not followed. mode: the new file's mode,
+ * or -1 for 0644 less the umask. 0 or -errno (nothing is replaced). */
+int wsg_web_replace_file(int dfd, const char *name, const char *tmp,
+                         const void *buf, size_t len, int mode);
+
 /* ---- the parts' handlers ---- */
 
 /* forms.c: the motion and grasping forms, and the page's motion buttons. */

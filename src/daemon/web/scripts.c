@@ -256,23 +256,6 @@ static enum MHD_Result file_get(struct wsg_web_req *req, int dfd,
     return ret;
 }
 
-/* The whole of buf to fd: 0 or -errno. */
-static int write_all(int fd, const char *buf, size_t len)
-{
-    ssize_t n;
-
-    while (len) {
-        n = write(fd, buf, len);
-        if (n < 0 && errno == EINTR)
-            continue;
-        if (n < 0)
-            return -errno;
-        buf += n;
-        len -= (size_t)n;
-    }
-    return 0;
-}
-
 /* PUT: the body becomes the file, through a temporary file renamed over
  * it: 201 made, 200 replaced. */
 static enum MHD_Result file_put(struct wsg_web_req *req, int dfd,
@@ -281,37 +264,17 @@ static enum MHD_Result file_put(struct wsg_web_req *req, int dfd,
     char why[256], tmp[SCRIPT_NAME_MAX + 8];
     struct stat st;
     unsigned status;
-    int fd, r, existed;
+    int r, existed;
 
     status = file_stat(dfd, name, &st, why, sizeof why);
     if (status != 0 && status != MHD_HTTP_NOT_FOUND)
         return wsg_web_error(req->conn, status, why);
     existed = status == 0;
-    /* Hidden (no script's name starts with a dot) and one per name: the
-     * loop serves one request at a time, so a file already there is what
-     * a crash left. */
+    /* Hidden: no script's name starts with a dot. */
     snprintf(tmp, sizeof tmp, ".%s.part", name);
-    fd = openat(dfd, tmp, O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC,
-                0644);
-    if (fd < 0 && errno == EEXIST && unlinkat(dfd, tmp, 0) == 0)
-        fd =
-            openat(dfd, tmp,
-                   O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0644);
-    if (fd < 0) {
-        r = -errno;
+    r = wsg_web_replace_file(dfd, name, tmp, req->body, req->body_len, -1);
+    if (r < 0)
         goto fail;
-    }
-    r = write_all(fd, req->body, req->body_len);
-    if (r == 0 && fsync(fd) < 0)
-        r = -errno;
-    if (close(fd) < 0 && r == 0)
-        r = -errno;
-    if (r == 0 && renameat(dfd, tmp, dfd, name) < 0)
-        r = -errno;
-    if (r < 0) {
-        unlinkat(dfd, tmp, 0);
-        goto fail;
-    }
     return wsg_web_json(req->conn, existed ? MHD_HTTP_OK : MHD_HTTP_CREATED,
                         "{\"name\":\"%s\",\"size\":%lu,\"created\":%s}", name,
                         (unsigned long)req->body_len,

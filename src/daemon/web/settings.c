@@ -13,7 +13,7 @@
  * every gripper of a fleet was made from, so they change for every
  * gripper, as a restart with the saved file would have them.
  */
-#define _GNU_SOURCE /* mkstemp, fchmod */
+#define _POSIX_C_SOURCE 200809L /* fstat, AT_FDCWD */
 
 #include <errno.h>
 #include <fcntl.h>
@@ -226,23 +226,6 @@ static int line_key(const char *line, size_t len, char *key, size_t cap)
     return 1;
 }
 
-/* Write all of buf to fd. 0 or -errno. */
-static int write_all(int fd, const char *buf, size_t len)
-{
-    while (len) {
-        ssize_t n = write(fd, buf, len);
-
-        if (n < 0) {
-            if (errno == EINTR)
-                continue;
-            return -errno;
-        }
-        buf += n;
-        len -= (size_t)n;
-    }
-    return 0;
-}
-
 /* The config file at path with the given settings' values from o: the
  * line of each (or of its negation: "no-crc = on") rewritten in place,
  * a second one of the same setting dropped (the file's last one would
@@ -259,7 +242,7 @@ static int save_config(const char *path, const struct wsg_options *o,
     size_t in_len = 0, out_len = 0, out_cap, i, n;
     struct stat st;
     FILE *f;
-    int fd = -1, r;
+    int r;
 
     for (i = 0; i < WEB_NSETTINGS; i++)
         rows[i] = table_row(web_settings[i].key);
@@ -327,23 +310,9 @@ static int save_config(const char *path, const struct wsg_options *o,
             out_len += (size_t)sprintf(out + out_len, "%s = %s\n",
                                        rows[i]->name, val);
     }
-    sprintf(tmp, "%s.XXXXXX", path);
-    fd = mkstemp(tmp);
-    if (fd < 0) {
-        r = -errno;
-        goto out;
-    }
-    r = fchmod(fd, st.st_mode & 07777) < 0 ? -errno : 0;
-    if (r == 0)
-        r = write_all(fd, out, out_len);
-    if (r == 0 && fsync(fd) < 0)
-        r = -errno;
-    if (close(fd) < 0 && r == 0)
-        r = -errno;
-    if (r == 0 && rename(tmp, path) < 0)
-        r = -errno;
-    if (r < 0)
-        unlink(tmp);
+    sprintf(tmp, "%s.new", path);
+    r = wsg_web_replace_file(AT_FDCWD, path, tmp, out, out_len,
+                             (int)(st.st_mode & 07777));
 out:
     free(tmp);
     free(out);
