@@ -128,6 +128,9 @@ struct wsg_axis_range wsg_axis_config_range(const struct wsg_axis_config *cfg,
 int wsg_axis_config_set(struct wsg_axis_config *cfg, enum wsg_axis_setting s,
                         double v, struct wsg_axis_range *valid);
 
+/* cfg's value of setting s (0 for WSG_AXIS_WIDTH, which has none). */
+double wsg_axis_config_get(const struct wsg_axis_config *cfg,
+                           enum wsg_axis_setting s);
 /* Change a setting of a running model's configuration (the web page's
  * settings), checked as wsg_axis_config_set checks it. An acceleration
  * or force limit also becomes the session's value at once, as Set

@@ -185,6 +185,24 @@ int wsg_axis_config_set(struct wsg_axis_config *cfg, enum wsg_axis_setting s,
     return 0;
 }
 
+double wsg_axis_config_get(const struct wsg_axis_config *cfg,
+                           enum wsg_axis_setting s)
+{
+    switch (s) {
+    case WSG_AXIS_ACCELERATION:
+        return cfg->default_acc;
+    case WSG_AXIS_FORCE_LIMIT:
+        return cfg->default_force;
+    case WSG_AXIS_CLAMP_TRAVEL:
+        return cfg->clamp_travel;
+    case WSG_AXIS_WIDTH_TOLERANCE:
+        return cfg->width_tolerance;
+    case WSG_AXIS_WIDTH:
+        break;
+    }
+    return 0.0;
+}
+
 /* A width clamped into the stroke, as motion commands take widths. */
 static double wsg_axis_clamp_width(const struct wsg_axis *ax, double width)
 {

@@ -412,6 +412,39 @@ static int put_field(char **buf, size_t *cap, size_t *used, const char *name,
     return r < 0 ? r : put(buf, cap, used, v);
 }
 
+void wsg_daemon_reconfigure(struct wsg_daemon *d, unsigned model)
+{
+    struct wsg_transport_settings ts;
+    size_t i, j;
+    unsigned q;
+
+    ts.check_crc = d->opt.check_crc;
+    ts.text = d->opt.text_interface;
+    for (i = 0; i < d->ngrippers; i++) {
+        struct wsg_gripper *g = &d->grippers[i];
+        struct wsg_axis *ax = wsg_device_axis(&g->dev);
+
+        /* Its time brought up to date first, its deadline checked after,
+         * as for any change from outside its interfaces. */
+        wsg_sched_touch(&d->sched, g);
+        g->dev.disconnect_fast_stop = d->opt.disconnect_fast_stop;
+        for (q = WSG_AXIS_ACCELERATION; q <= WSG_AXIS_WIDTH_TOLERANCE; q++)
+            if (model & (1u << q))
+                wsg_axis_configure(ax, (enum wsg_axis_setting)q,
+                                   wsg_axis_config_get(
+                                       &d->opt.axis, (enum wsg_axis_setting)q),
+                                   NULL);
+        for (j = 0; j < g->ntransports; j++) {
+            struct wsg_transport *t = &g->transports[j];
+
+            if (t->ops->configure)
+                t->ops->configure(t, &ts);
+        }
+        wsg_axis_settle(ax);
+        wsg_sched_check(&d->sched, g);
+    }
+}
+
 /* "ready tcp=A udp=B ... control=C web=D"; in a fleet each gripper field lists
  * every gripper's value, comma-separated, in gripper order. */
 int wsg_daemon_announce(struct wsg_daemon *d)

@@ -50,5 +50,11 @@ int wsg_daemon_announce(struct wsg_daemon *d);
 /* Serve until SIGINT/SIGTERM (0) or a failure (-errno, printed). */
 int wsg_daemon_run(struct wsg_daemon *d);
 void wsg_daemon_close(struct wsg_daemon *d);
+/* Make d->opt, changed while the daemon runs (the web page's settings),
+ * every running gripper's: the disconnect FAST STOP, every interface's
+ * CRC check and text interface (transports' configure), and the model
+ * settings whose bit (1u << enum wsg_axis_setting) is in model, from
+ * d->opt.axis, as Set Acceleration and Set Force Limit take them. */
+void wsg_daemon_reconfigure(struct wsg_daemon *d, unsigned model);
 
 #endif

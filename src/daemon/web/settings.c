@@ -68,23 +68,6 @@ static const void *opt_field(const struct wsg_options *o, size_t at)
 }
 
 /* A model setting's value in a model's configuration. */
-static double model_value(const struct wsg_axis_config *c,
-                          enum wsg_axis_setting q)
-{
-    switch (q) {
-    case WSG_AXIS_ACCELERATION:
-        return c->default_acc;
-    case WSG_AXIS_FORCE_LIMIT:
-        return c->default_force;
-    case WSG_AXIS_CLAMP_TRAVEL:
-        return c->clamp_travel;
-    case WSG_AXIS_WIDTH_TOLERANCE:
-        return c->width_tolerance;
-    default:
-        return 0.0;
-    }
-}
-
 /* A setting's value as the config file has it: on|off, a number, a path;
  * "" for no startup script. */
 static void value_text(const struct wsg_options *o,
@@ -98,7 +81,7 @@ static void value_text(const struct wsg_options *o,
                  *(const int *)opt_field(o, s->at) ? "on" : "off");
         break;
     case WSG_SETTING_MODEL:
-        snprintf(buf, cap, "%g", model_value(&o->axis, s->quantity));
+        snprintf(buf, cap, "%g", wsg_axis_config_get(&o->axis, s->quantity));
         break;
     default:
         text = *(const char *const *)opt_field(o, s->at);
@@ -327,14 +310,16 @@ static void apply(struct wsg_web *web, const struct wsg_options *o,
                   const int *given, const char *script)
 {
     struct wsg_daemon *d = web->d;
-    struct wsg_transport_settings ts;
-    size_t i, j, k;
+    unsigned model = 0;
+    size_t k;
 
     for (k = 0; k < WEB_NSETTINGS; k++) {
         const struct wsg_setting *s = table_row(web_settings[k].key);
 
         if (!given[k] || !s)
             continue;
+        if (s->type == WSG_SETTING_MODEL)
+            model |= 1u << s->quantity;
         if (s->type == WSG_SETTING_BOOL)
             *(int *)((char *)&d->opt + s->at - 1) =
                 *(const int *)opt_field(o, s->at);
@@ -347,30 +332,7 @@ static void apply(struct wsg_web *web, const struct wsg_options *o,
         }
     }
     d->opt.axis = o->axis;
-    ts.check_crc = d->opt.check_crc;
-    ts.text = d->opt.text_interface;
-    for (i = 0; i < d->ngrippers; i++) {
-        struct wsg_gripper *g = &d->grippers[i];
-        struct wsg_axis *ax = wsg_device_axis(&g->dev);
-
-        wsg_sched_touch(web->sched, g);
-        g->dev.disconnect_fast_stop = d->opt.disconnect_fast_stop;
-        for (k = 0; k < WEB_NSETTINGS; k++) {
-            const struct wsg_setting *s = table_row(web_settings[k].key);
-
-            if (given[k] && s && s->type == WSG_SETTING_MODEL)
-                wsg_axis_configure(ax, s->quantity,
-                                   model_value(&o->axis, s->quantity), NULL);
-        }
-        for (j = 0; j < g->ntransports; j++) {
-            struct wsg_transport *t = &g->transports[j];
-
-            if (t->ops->configure)
-                t->ops->configure(t, &ts);
-        }
-        wsg_axis_settle(ax);
-        wsg_sched_check(web->sched, g);
-    }
+    wsg_daemon_reconfigure(d, model);
 }
 
 int wsg_web_settings_apply(struct wsg_web *web,
