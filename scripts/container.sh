@@ -20,7 +20,7 @@
 #   --export DIR     the image's root filesystem, unpacked into DIR
 # Environment: PODMAN (default podman). podman's own settings apply, e.g.
 #   CONTAINERS_STORAGE_CONF for another storage root (the test uses that).
-# Run scripts/deps.sh first (podman, cmake, gcc, libc6-dev).
+# Run scripts/deps.sh --test first (podman, cmake, gcc, libc6-dev).
 set -eu
 
 ME=container.sh
@@ -45,7 +45,7 @@ while [ $# -gt 0 ]; do
     esac
 done
 command -v "$PODMAN" >/dev/null 2>&1 ||
-    { echo "$ME: $PODMAN not found (scripts/deps.sh installs podman)" >&2; exit 1; }
+    { echo "$ME: $PODMAN not found (scripts/deps.sh --test installs podman)" >&2; exit 1; }
 
 # Temporary files (the context, a created container) go when we do.
 ctx="" ctr=""

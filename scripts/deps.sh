@@ -1,46 +1,68 @@
 #!/bin/sh
-# Installs the Debian packages wsgemu needs to build and test, and only those
-# that are missing, so it is quick and offline-safe on a prepared machine.
-# Runs apt-get as root, or through sudo when not root.
+# Installs the Debian packages wsgemu needs, and only those that are
+# missing, so it is quick and offline-safe on a prepared machine. Runs
+# apt-get as root, or through sudo when not root.
+#
+# Usage: scripts/deps.sh          what building and running needs (the
+#                                 README's quick start)
+#        scripts/deps.sh --test   that and what the whole test suite needs
+#                                 (scripts/test.sh, the README's test
+#                                 command): valgrind, clang, QEMU, podman,
+#                                 Python, Chromium, ...
 set -eu
 
+test_deps=0
+case "${1:-}" in
+"") ;;
+--test) test_deps=1 ;;
+*)
+    echo "usage: scripts/deps.sh [--test]" >&2
+    exit 2
+    ;;
+esac
+
+# ---- building and running ----
 pkgs="cmake make gcc libc6-dev"
 # Scripts on the gripper run on Debian's Lua 5.4, found with pkg-config.
 pkgs="$pkgs pkgconf liblua5.4-dev"
 # The web page (--web) is served by GNU libmicrohttpd, found with
 # pkg-config; its -dev package brings GnuTLS's headers, which the static
-# build's stand-in for GnuTLS is checked against (src/daemon/web/gnutls_none.c).
+# stand-in for GnuTLS is checked against (src/daemon/web/gnutls_none.c).
 pkgs="$pkgs libmicrohttpd-dev"
-# The memcheck test (tests/memcheck.sh) runs the daemon under valgrind.
-pkgs="$pkgs valgrind"
-# The .deb and its test (tests/package/run.sh): CPack's Depends come from
-# dpkg-shlibdeps (dpkg-dev), which CPack feeds the programs it finds with
-# file; man renders the man pages and systemd-analyze verifies the unit.
-pkgs="$pkgs dpkg-dev file man-db systemd"
-# The container image (scripts/container.sh, tests/container/run.sh):
-# podman builds and runs it; runc because crun refuses a cgroup v1/v2
-# hybrid; ip brings up loopback where the test runs the exported rootfs.
-pkgs="$pkgs podman runc iproute2"
-# The Python client's tests (tests/python/run.sh): Debian's python3 makes a
-# venv that sees the system pytest, and pip installs python/ into it offline.
-pkgs="$pkgs python3 python3-venv python3-pytest"
-# The web page's browser tests (tests/browser/run.sh): Debian's Chromium,
-# headless, driven through WebDriver by chromium-driver and Debian's
-# python3-selenium.
-pkgs="$pkgs chromium chromium-driver python3-selenium"
-# The libFuzzer harnesses (tests/fuzz, the fuzz build of scripts/test.sh):
-# clang, and its fuzzer and sanitizer runtime, which clang only recommends.
-# The runtime's package carries clang's major version: the clang-N that the
-# clang package depends on (Debian 12: 14).
-clang_major=$(apt-cache depends clang 2>/dev/null |
-    sed -n 's/^ *Depends: clang-\([0-9][0-9]*\)$/\1/p' | head -n 1)
-pkgs="$pkgs clang libclang-rt-${clang_major:-14}-dev"
-# The CAN tests (tests/can/run.sh): where the host kernel has no vcan, QEMU
-# boots Debian's kernel with it; xz unpacks that kernel, iproute2's ip and
-# tc make the buses. The kernel and busybox themselves are only downloaded,
-# by tests/can/vm-image.sh. The VM runs amd64 programs: amd64 hosts only.
-if [ "$(dpkg --print-architecture)" = amd64 ]; then
-    pkgs="$pkgs qemu-system-x86 xz-utils iproute2"
+
+# ---- the test suite ----
+if [ "$test_deps" = 1 ]; then
+    # The memcheck test (tests/memcheck.sh) runs the daemon under valgrind.
+    pkgs="$pkgs valgrind"
+    # The .deb and its test (tests/package/run.sh): CPack's Depends come from
+    # dpkg-shlibdeps (dpkg-dev), which CPack feeds the programs it finds with
+    # file; man renders the man pages and systemd-analyze verifies the unit.
+    pkgs="$pkgs dpkg-dev file man-db systemd"
+    # The container image (scripts/container.sh, tests/container/run.sh):
+    # podman builds and runs it; runc because crun refuses a cgroup v1/v2
+    # hybrid; ip brings up loopback where the test runs the exported rootfs.
+    pkgs="$pkgs podman runc iproute2"
+    # The Python client's tests (tests/python/run.sh): Debian's python3 makes a
+    # venv that sees the system pytest, and pip installs python/ into it offline.
+    pkgs="$pkgs python3 python3-venv python3-pytest"
+    # The web page's browser tests (tests/browser/run.sh): Debian's Chromium,
+    # headless, driven through WebDriver by chromium-driver and Debian's
+    # python3-selenium.
+    pkgs="$pkgs chromium chromium-driver python3-selenium"
+    # The libFuzzer harnesses (tests/fuzz, the fuzz build of scripts/test.sh):
+    # clang, and its fuzzer and sanitizer runtime, which clang only recommends.
+    # The runtime's package carries clang's major version: the clang-N that the
+    # clang package depends on (Debian 12: 14).
+    clang_major=$(apt-cache depends clang 2>/dev/null |
+        sed -n 's/^ *Depends: clang-\([0-9][0-9]*\)$/\1/p' | head -n 1)
+    pkgs="$pkgs clang libclang-rt-${clang_major:-14}-dev"
+    # The CAN tests (tests/can/run.sh): where the host kernel has no vcan, QEMU
+    # boots Debian's kernel with it; xz unpacks that kernel, iproute2's ip and
+    # tc make the buses. The kernel and busybox themselves are only downloaded,
+    # by tests/can/vm-image.sh. The VM runs amd64 programs: amd64 hosts only.
+    if [ "$(dpkg --print-architecture)" = amd64 ]; then
+        pkgs="$pkgs qemu-system-x86 xz-utils iproute2"
+    fi
 fi
 
 missing=""

@@ -18,7 +18,7 @@
 #               tests/fuzz/regressions. Without clang or its libFuzzer
 #               runtime, the fuzz tests are skipped (exit 77) and say why.
 # Every run always happens; the summary at the end says which failed, and
-# the exit status is non-zero if any did. Run scripts/deps.sh first.
+# the exit status is non-zero if any did. Run scripts/deps.sh --test first.
 # Usage: scripts/test.sh [CTEST_ARGS...]   (passed to every ctest run, e.g.
 #   -R integ_basic or -LE can)
 set -eu

@@ -47,7 +47,7 @@ if [ $# = 0 ]; then
 fi
 
 if ! command -v valgrind >/dev/null 2>&1; then
-    echo "$ME: no valgrind here (scripts/deps.sh installs it): skipped"
+    echo "$ME: no valgrind here (scripts/deps.sh --test installs it): skipped"
     exit 77
 fi
 

@@ -10,7 +10,7 @@
 # Environment: WSG_TEST_TIME_SCALE (a number >= 1) multiplies the waits;
 #   WSG_HAVE_WEB=0 (set by ctest for a build without libmicrohttpd) skips.
 # Exit status: pytest's (0 all passed), 77 when Chromium, its driver or
-#   selenium is missing (scripts/deps.sh installs them).
+#   selenium is missing (scripts/deps.sh --test installs them).
 set -u
 
 if [ $# -lt 3 ]; then
@@ -26,14 +26,14 @@ py=/usr/bin/python3
 for need in /usr/bin/chromium /usr/bin/chromedriver "$py"; do
     if [ ! -x "$need" ]; then
         echo "run.sh: skipped: no $need" \
-             "(scripts/deps.sh installs chromium chromium-driver)"
+             "(scripts/deps.sh --test installs chromium chromium-driver)"
         exit 77
     fi
 done
 for mod in pytest selenium; do
     if ! "$py" -c "import $mod" 2>/dev/null; then
         echo "run.sh: skipped: $py has no module $mod" \
-             "(scripts/deps.sh installs python3-pytest python3-selenium)"
+             "(scripts/deps.sh --test installs python3-pytest python3-selenium)"
         exit 77
     fi
 done

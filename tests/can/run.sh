@@ -160,7 +160,7 @@ fi
 
 # -------------------------------------------------------------------- VM ---
 command -v qemu-system-x86_64 >/dev/null 2>&1 ||
-    cannot_run "no $IFACE and no qemu-system-x86_64 (scripts/deps.sh installs qemu-system-x86)"
+    cannot_run "no $IFACE and no qemu-system-x86_64 (scripts/deps.sh --test installs qemu-system-x86)"
 command -v ldd >/dev/null 2>&1 || cannot_run "ldd missing"
 
 st=0

@@ -9,7 +9,7 @@
 #
 # Everything comes from the Debian archive through `apt-get download` and is
 # unpacked with dpkg-deb into a cache; nothing is installed. The tools it
-# needs (apt, dpkg, tar, xz) are installed by scripts/deps.sh.
+# needs (apt, dpkg, tar, xz) are installed by scripts/deps.sh --test.
 #
 # Usage: vm-image.sh [CACHE_DIR]
 #   CACHE_DIR: $WSG_CAN_VM_CACHE, else ~/.cache/wsgemu/can-vm (where that
@@ -45,7 +45,7 @@ fi
 [ "$(uname -m)" = x86_64 ] || skip "the VM runs amd64 test binaries: this host is $(uname -m)"
 for tool in apt-get apt-cache dpkg-deb tar xz flock; do
     command -v "$tool" >/dev/null 2>&1 ||
-        skip "$tool missing (scripts/deps.sh installs what the CAN VM needs)"
+        skip "$tool missing (scripts/deps.sh --test installs what the CAN VM needs)"
 done
 mkdir -p "$CACHE" 2>/dev/null || skip "cannot create the cache $CACHE"
 exec 9>"$CACHE/.lock"

@@ -46,9 +46,9 @@ cannot_run() {
 # Rootful podman (no subordinate ids to set up) and chroot need root.
 [ "$(id -u)" = 0 ] || cannot_run "needs root (rootful podman, chroot)"
 command -v podman >/dev/null 2>&1 ||
-    cannot_run "podman is not installed (scripts/deps.sh installs it)"
+    cannot_run "podman is not installed (scripts/deps.sh --test installs it)"
 for t in nsenter unshare chroot ip readelf; do
-    command -v $t >/dev/null 2>&1 || cannot_run "$t is missing (scripts/deps.sh)"
+    command -v $t >/dev/null 2>&1 || cannot_run "$t is missing (scripts/deps.sh --test)"
 done
 
 fail() {

@@ -11,7 +11,7 @@
 # Environment: WSG_TEST_TIME_SCALE (a number >= 1) multiplies the tests'
 #   waits, as in the C tests (tests/integration/emu.h).
 # Exit status: pytest's (0 all passed), 1 a setup step failed, 77 no
-#   Debian python3 with venv and pytest here (scripts/deps.sh installs them).
+#   Debian python3 with venv and pytest here (scripts/deps.sh --test installs them).
 set -u
 
 if [ $# -lt 3 ]; then
@@ -31,7 +31,7 @@ fi
 for mod in venv ensurepip pytest; do
     if ! "$py" -c "import $mod" 2>/dev/null; then
         echo "run.sh: skipped: $py has no module $mod" \
-             "(scripts/deps.sh installs python3-venv python3-pytest)"
+             "(scripts/deps.sh --test installs python3-venv python3-pytest)"
         exit 77
     fi
 done
