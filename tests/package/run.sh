@@ -9,7 +9,9 @@
 #      of it uncommented (but `can`, which needs a SocketCAN interface),
 #      whose values the gripper then shows; a bad line in it is refused.
 #   2. the .deb from cpack: its fields (name, version, architecture,
-#      dependencies, conffiles) and its files; dpkg installs it into a
+#      dependencies, conffiles), its changelog (this version) and its
+#      files; lintian finds no error and no warning in it (where lintian
+#      is installed; scripts/deps.sh installs it); dpkg installs it into a
 #      scratch root with a database of its own, the installed wsgemu
 #      serves with the installed config, wsgctl talks to it; dpkg purges
 #      it without leaving a file behind.
@@ -173,7 +175,7 @@ check "every file is installed"
 has_files "$P" bin/wsgemu bin/wsgctl \
     etc/wsgemu/wsgemu.conf "$DOC/examples/wsgemu.conf" \
     lib/systemd/system/wsgemu.service \
-    "$DOC/LICENSE" "$DOC/copyright" "$DOC/README.md"
+    "$DOC/LICENSE" "$DOC/copyright" "$DOC/README.md" "$DOC/changelog.gz"
 for b in wsgemu wsgctl; do
     [ -x "$P/bin/$b" ] || fail "$P/bin/$b is not executable"
 done
@@ -348,6 +350,42 @@ dpkg-deb -I "$DEB" conffiles >"$S/conffiles" 2>&1 ||
 grep -qx /etc/wsgemu/wsgemu.conf "$S/conffiles" ||
     { show "$S/conffiles"; fail "/etc/wsgemu/wsgemu.conf is no conffile"; }
 
+check "the changelog: Debian's format, this version, gzip -9n"
+dpkg-deb --fsys-tarfile "$DEB" |
+    tar -xO ./usr/share/doc/wsgemu/changelog.gz >"$S/changelog.gz" ||
+    fail "no /usr/share/doc/wsgemu/changelog.gz in the package"
+gzip -dc "$S/changelog.gz" >"$S/changelog"
+if command -v dpkg-parsechangelog >/dev/null 2>&1; then
+    v=$(dpkg-parsechangelog -l "$S/changelog" -S Version)
+    [ "$v" = "$VERSION" ] ||
+        fail "the changelog's latest version is '$v', not $VERSION (packaging/changelog.in)"
+fi
+
+# lintian: no error, no warning. The one finding allowed is the
+# maintainer placeholder of an unconfigured build (WSG_MAINTAINER in
+# CMakeLists.txt), which lintian rightly calls bogus.
+if command -v lintian >/dev/null 2>&1; then
+    check "lintian: no errors, no warnings"
+    suppress=
+    case $(field Maintainer) in
+    *'<unset@invalid>')
+        echo "    Maintainer is the placeholder (set WSG_MAINTAINER): its two tags are suppressed"
+        suppress="--suppress-tags bogus-mail-host,bogus-mail-host-in-debian-changelog"
+        ;;
+    esac
+    st=0
+    # shellcheck disable=SC2086 # none or two words
+    lintian --fail-on error,warning $suppress "$DEB" >"$S/lintian.out" 2>&1 ||
+        st=$?
+    # Root gets a notice on stderr; findings are the lines "E: " and "W: ".
+    if [ "$st" != 0 ] || grep -q '^[EW]: ' "$S/lintian.out"; then
+        show "$S/lintian.out"
+        fail "lintian: status $st, or errors or warnings"
+    fi
+else
+    check "no lintian here (scripts/deps.sh installs it): not run (skipped)"
+fi
+
 check "the package's files"
 dpkg-deb -c "$DEB" | awk '{ print $NF }' | sed 's|^\./|/|' >"$S/files"
 missing=""
@@ -355,7 +393,8 @@ for f in /usr/bin/wsgemu /usr/bin/wsgctl \
     /usr/share/man/man1/wsgemu.1.gz /usr/share/man/man1/wsgctl.1.gz \
     /etc/wsgemu/wsgemu.conf /usr/share/doc/wsgemu/examples/wsgemu.conf \
     /usr/lib/systemd/system/wsgemu.service /usr/share/doc/wsgemu/copyright \
-    /usr/share/doc/wsgemu/LICENSE /usr/share/doc/wsgemu/README.md; do
+    /usr/share/doc/wsgemu/LICENSE /usr/share/doc/wsgemu/README.md \
+    /usr/share/doc/wsgemu/changelog.gz; do
     grep -qxF "$f" "$S/files" || missing="$missing $f"
 done
 [ -z "$missing" ] || { show "$S/files"; fail "not in the package:$missing"; }
