@@ -14,11 +14,14 @@
 #                                   is kept, as it holds the admin's edits
 #   UNITDIR/wsgemu.service          with ExecStart naming this prefix's
 #                                   program and config file
+#   UNITDIR/wsgemu@.service         the template (an emulator per config
+#                                   file, SYSCONFDIR/wsgemu/NAME.conf),
+#                                   its ExecStart written likewise
 # Absolute paths come from GNUInstallDirs' own rule, applied to the prefix
 # of this install: /etc for the prefixes / and /usr, /etc/opt/X for /opt/X,
 # else PREFIX/etc; other directories below the prefix unless absolute.
 # DESTDIR (CPack's staging directory) is applied by file(INSTALL) as usual,
-# and is not part of any path written into the unit.
+# and is not part of any path written into the units.
 
 # Set only so that GNUInstallDirs, outside a project, need not guess it.
 set(CMAKE_INSTALL_LIBDIR lib)
@@ -38,18 +41,25 @@ else()
        FILES "${WSG_PKG_SRC}/wsgemu.conf")
 endif()
 
-# The unit: the source names the Debian paths; write this install's.
-set(wsg_exec "ExecStart=/usr/bin/wsgemu --config /etc/wsgemu/wsgemu.conf")
-file(READ "${WSG_PKG_SRC}/wsgemu.service" wsg_unit)
-string(FIND "${wsg_unit}" "${wsg_exec}" wsg_at)
-if(wsg_at EQUAL -1)
-  message(FATAL_ERROR "${WSG_PKG_SRC}/wsgemu.service has no line "
-                      "'${wsg_exec}' to write this install's paths into")
-endif()
-string(REPLACE "${wsg_exec}"
-  "ExecStart=${wsg_bindir}/wsgemu --config ${wsg_confdir}/wsgemu.conf"
-  wsg_unit "${wsg_unit}")
+# The units: the sources name the Debian paths; write this install's.
+# wsgemu.service reads wsgemu.conf, the template wsgemu@.service NAME.conf
+# (%i, its instance).
 file(MAKE_DIRECTORY "${WSG_PKG_BIN}")
-file(WRITE "${WSG_PKG_BIN}/wsgemu.service" "${wsg_unit}")
-file(INSTALL DESTINATION "${wsg_unitdir}" TYPE FILE
-     FILES "${WSG_PKG_BIN}/wsgemu.service")
+foreach(wsg_pair "wsgemu.service:wsgemu.conf" "wsgemu@.service:%i.conf")
+  string(REPLACE ":" ";" wsg_pair "${wsg_pair}")
+  list(GET wsg_pair 0 wsg_name)
+  list(GET wsg_pair 1 wsg_conf)
+  set(wsg_exec "ExecStart=/usr/bin/wsgemu --config /etc/wsgemu/${wsg_conf}")
+  file(READ "${WSG_PKG_SRC}/${wsg_name}" wsg_unit)
+  string(FIND "${wsg_unit}" "${wsg_exec}" wsg_at)
+  if(wsg_at EQUAL -1)
+    message(FATAL_ERROR "${WSG_PKG_SRC}/${wsg_name} has no line "
+                        "'${wsg_exec}' to write this install's paths into")
+  endif()
+  string(REPLACE "${wsg_exec}"
+    "ExecStart=${wsg_bindir}/wsgemu --config ${wsg_confdir}/${wsg_conf}"
+    wsg_unit "${wsg_unit}")
+  file(WRITE "${WSG_PKG_BIN}/${wsg_name}" "${wsg_unit}")
+  file(INSTALL DESTINATION "${wsg_unitdir}" TYPE FILE
+       FILES "${WSG_PKG_BIN}/${wsg_name}")
+endforeach()

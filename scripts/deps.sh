@@ -38,6 +38,9 @@ if [ "$test_deps" = 1 ]; then
     # dpkg-shlibdeps (dpkg-dev), which CPack feeds the programs it finds with
     # file; man renders the man pages and systemd-analyze verifies the unit.
     pkgs="$pkgs dpkg-dev file man-db systemd"
+    # The package test also holds the .deb to Debian's own checks: lintian,
+    # errors and warnings (tests/package/run.sh).
+    pkgs="$pkgs lintian"
     # The container image (scripts/container.sh, tests/container/run.sh):
     # podman builds and runs it; runc because crun refuses a cgroup v1/v2
     # hybrid; ip brings up loopback where the test runs the exported rootfs.

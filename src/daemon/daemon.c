@@ -12,6 +12,7 @@
 #define _GNU_SOURCE /* signalfd */
 
 #include "daemon.h"
+#include "notify.h"
 
 #include <errno.h>
 #include <signal.h>
@@ -445,6 +446,26 @@ void wsg_daemon_reconfigure(struct wsg_daemon *d, unsigned model)
     }
 }
 
+/* A service manager (systemd, Type=notify) waits for this, after the ready
+ * line, and shows the line as the service's status. Not being heard costs
+ * a warning only: the ready line is out, and systemd ends a service that
+ * never says READY=1 by its own timeout. */
+static void notify_ready(const char *line)
+{
+    static const char ready[] = "READY=1\nSTATUS=";
+    char *msg = malloc(sizeof ready + strlen(line));
+    int r = -ENOMEM;
+
+    if (msg) {
+        memcpy(msg, ready, sizeof ready - 1);
+        strcpy(msg + sizeof ready - 1, line);
+        r = wsg_notify(msg);
+        free(msg);
+    }
+    if (r < 0)
+        fprintf(stderr, "wsgemu: NOTIFY_SOCKET: %s\n", strerror(-r));
+}
+
 /* "ready tcp=A udp=B ... control=C web=D"; in a fleet each gripper field lists
  * every gripper's value, comma-separated, in gripper order. */
 int wsg_daemon_announce(struct wsg_daemon *d)
@@ -482,6 +503,7 @@ int wsg_daemon_announce(struct wsg_daemon *d)
     /* Scripts block on this line: it must not sit in a pipe's buffer. */
     printf("%s\n", line);
     fflush(stdout);
+    notify_ready(line);
     free(line);
     return 0;
 }

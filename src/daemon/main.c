@@ -1,7 +1,8 @@
 /*
  * wsgemu's entry point: parse the options, open everything, announce
- * readiness, serve until SIGINT/SIGTERM. Exit status 0 after a signal, 1 when
- * something cannot be opened or fails, 2 for bad options.
+ * readiness (the ready line, and READY=1 to a service manager), serve until
+ * SIGINT/SIGTERM. Exit status 0 after a signal, 1 when something cannot be
+ * opened or fails, 2 for bad options.
  */
 #define _GNU_SOURCE
 
@@ -9,6 +10,7 @@
 #include <string.h>
 
 #include "daemon.h"
+#include "notify.h"
 
 int main(int argc, char **argv)
 {
@@ -37,9 +39,10 @@ int main(int argc, char **argv)
         goto out;
     if (wsg_daemon_announce(&d) < 0)
         goto out;
-    if (wsg_daemon_run(&d) < 0)
-        goto out;
-    status = 0;
+    if (wsg_daemon_run(&d) == 0)
+        status = 0;
+    /* A service manager (Type=notify) learns that the end is on purpose. */
+    wsg_notify("STOPPING=1");
 out:
     wsg_daemon_close(&d);
     return status;

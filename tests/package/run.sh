@@ -2,21 +2,26 @@
 # run.sh: test what users install, the way they install it:
 #   1. `cmake --install BUILD --prefix SCRATCH`: every file is there (the
 #      two programs, the man pages, the config file and its example, the
-#      systemd unit, the docs), the benchmark tools are not; the man pages
+#      systemd units, the docs), the benchmark tools are not; the man pages
 #      render without warnings (where man is installed); the installed
 #      wsgemu serves and the installed wsgctl talks to it; the installed
 #      config file starts it, and so does a copy with every example setting
 #      of it uncommented (but `can`, which needs a SocketCAN interface),
 #      whose values the gripper then shows; a bad line in it is refused.
 #   2. the .deb from cpack: its fields (name, version, architecture,
-#      dependencies, conffiles) and its files; dpkg installs it into a
+#      dependencies, conffiles), its changelog (this version) and its
+#      files; lintian finds no error and no warning in it (where lintian
+#      is installed; scripts/deps.sh installs it); dpkg installs it into a
 #      scratch root with a database of its own, the installed wsgemu
 #      serves with the installed config, wsgctl talks to it; dpkg purges
 #      it without leaving a file behind.
-#   3. `systemd-analyze verify` on the installed unit, with the installed
-#      man pages (Documentation=man:wsgemu(1)); where there is no
-#      systemd-analyze this step alone is skipped. The .deb's unit must be
-#      the same but for the /usr paths in ExecStart.
+#   3. `systemd-analyze verify` on the installed units (wsgemu.service
+#      and the template wsgemu@.service), with the installed man pages
+#      (Documentation=man:wsgemu(1)), and `systemd-analyze security
+#      --offline=true` rates each exposed 2.0 or lower (skipped where it
+#      has no --offline); where there is no systemd-analyze these are
+#      skipped. The template's sandbox is the unit's; the .deb's units must
+#      be the installed ones but for the /usr paths in ExecStart.
 # Every emulator started here listens on free ports (port 0) only.
 #
 # Usage: run.sh CMAKE CPACK BUILD_DIR SOURCE_DIR VERSION
@@ -172,8 +177,8 @@ DOC=share/doc/wsgemu
 check "every file is installed"
 has_files "$P" bin/wsgemu bin/wsgctl \
     etc/wsgemu/wsgemu.conf "$DOC/examples/wsgemu.conf" \
-    lib/systemd/system/wsgemu.service \
-    "$DOC/LICENSE" "$DOC/copyright" "$DOC/README.md"
+    lib/systemd/system/wsgemu.service lib/systemd/system/wsgemu@.service \
+    "$DOC/LICENSE" "$DOC/copyright" "$DOC/README.md" "$DOC/changelog.gz"
 for b in wsgemu wsgctl; do
     [ -x "$P/bin/$b" ] || fail "$P/bin/$b is not executable"
 done
@@ -202,10 +207,13 @@ check "the benchmark tools are not installed"
 for b in wsgbench wsgref; do
     [ ! -e "$P/bin/$b" ] || fail "$P/bin/$b is installed"
 done
-check "the unit starts this prefix's wsgemu with this prefix's config"
+check "the units start this prefix's wsgemu with this prefix's config"
 want="ExecStart=$P/bin/wsgemu --config $P/etc/wsgemu/wsgemu.conf"
 grep -qxF "$want" "$P/lib/systemd/system/wsgemu.service" ||
     fail "no line '$want' in the installed unit"
+want="ExecStart=$P/bin/wsgemu --config $P/etc/wsgemu/%i.conf"
+grep -qxF "$want" "$P/lib/systemd/system/wsgemu@.service" ||
+    fail "no line '$want' in the installed template unit"
 
 if command -v man >/dev/null 2>&1; then
     for m in wsgemu wsgctl; do
@@ -348,14 +356,52 @@ dpkg-deb -I "$DEB" conffiles >"$S/conffiles" 2>&1 ||
 grep -qx /etc/wsgemu/wsgemu.conf "$S/conffiles" ||
     { show "$S/conffiles"; fail "/etc/wsgemu/wsgemu.conf is no conffile"; }
 
+check "the changelog: Debian's format, this version, gzip -9n"
+dpkg-deb --fsys-tarfile "$DEB" |
+    tar -xO ./usr/share/doc/wsgemu/changelog.gz >"$S/changelog.gz" ||
+    fail "no /usr/share/doc/wsgemu/changelog.gz in the package"
+gzip -dc "$S/changelog.gz" >"$S/changelog"
+if command -v dpkg-parsechangelog >/dev/null 2>&1; then
+    v=$(dpkg-parsechangelog -l "$S/changelog" -S Version)
+    [ "$v" = "$VERSION" ] ||
+        fail "the changelog's latest version is '$v', not $VERSION (packaging/changelog.in)"
+fi
+
+# lintian: no error, no warning. The one finding allowed is the
+# maintainer placeholder of an unconfigured build (WSG_MAINTAINER in
+# CMakeLists.txt), which lintian rightly calls bogus.
+if command -v lintian >/dev/null 2>&1; then
+    check "lintian: no errors, no warnings"
+    suppress=
+    case $(field Maintainer) in
+    *'<unset@invalid>')
+        echo "    Maintainer is the placeholder (set WSG_MAINTAINER): its two tags are suppressed"
+        suppress="--suppress-tags bogus-mail-host,bogus-mail-host-in-debian-changelog"
+        ;;
+    esac
+    st=0
+    # shellcheck disable=SC2086 # none or two words
+    lintian --fail-on error,warning $suppress "$DEB" >"$S/lintian.out" 2>&1 ||
+        st=$?
+    # Root gets a notice on stderr; findings are the lines "E: " and "W: ".
+    if [ "$st" != 0 ] || grep -q '^[EW]: ' "$S/lintian.out"; then
+        show "$S/lintian.out"
+        fail "lintian: status $st, or errors or warnings"
+    fi
+else
+    check "no lintian here (scripts/deps.sh installs it): not run (skipped)"
+fi
+
 check "the package's files"
 dpkg-deb -c "$DEB" | awk '{ print $NF }' | sed 's|^\./|/|' >"$S/files"
 missing=""
 for f in /usr/bin/wsgemu /usr/bin/wsgctl \
     /usr/share/man/man1/wsgemu.1.gz /usr/share/man/man1/wsgctl.1.gz \
     /etc/wsgemu/wsgemu.conf /usr/share/doc/wsgemu/examples/wsgemu.conf \
-    /usr/lib/systemd/system/wsgemu.service /usr/share/doc/wsgemu/copyright \
-    /usr/share/doc/wsgemu/LICENSE /usr/share/doc/wsgemu/README.md; do
+    /usr/lib/systemd/system/wsgemu.service \
+    /usr/lib/systemd/system/wsgemu@.service /usr/share/doc/wsgemu/copyright \
+    /usr/share/doc/wsgemu/LICENSE /usr/share/doc/wsgemu/README.md \
+    /usr/share/doc/wsgemu/changelog.gz; do
     grep -qxF "$f" "$S/files" || missing="$missing $f"
 done
 [ -z "$missing" ] || { show "$S/files"; fail "not in the package:$missing"; }
@@ -382,11 +428,16 @@ v=$(dpkg --root="$R" -s wsgemu | sed -n 's/^Version: //p')
 [ "$v" = "$VERSION" ] || fail "dpkg says version '$v', not $VERSION"
 has_files "$R" usr/bin/wsgemu usr/bin/wsgctl etc/wsgemu/wsgemu.conf \
     usr/lib/systemd/system/wsgemu.service usr/share/doc/wsgemu/copyright
-check "the package's unit: ExecStart with /usr/bin and /etc"
+check "the package's units: ExecStart with /usr/bin and /etc"
 grep -qxF "ExecStart=/usr/bin/wsgemu --config /etc/wsgemu/wsgemu.conf" \
     "$R/usr/lib/systemd/system/wsgemu.service" ||
     fail "the package's unit has not the /usr paths in ExecStart"
-cp "$R/usr/lib/systemd/system/wsgemu.service" "$S/deb.service"
+grep -qxF "ExecStart=/usr/bin/wsgemu --config /etc/wsgemu/%i.conf" \
+    "$R/usr/lib/systemd/system/wsgemu@.service" ||
+    fail "the package's template unit has not the /usr paths in ExecStart"
+for u in wsgemu.service wsgemu@.service; do
+    cp "$R/usr/lib/systemd/system/$u" "$S/deb.$u"
+done
 
 version "$R/usr/bin/wsgemu" wsgemu
 version "$R/usr/bin/wsgctl" wsgctl
@@ -405,23 +456,59 @@ left=$(cd "$R" && find . -path ./var/lib/dpkg -prune -o ! -type d -print)
 [ -z "$left" ] || fail "left after the purge: $left"
 
 # ===================================================================
-echo "=== 3. the systemd unit"
+echo "=== 3. the systemd units"
+U=$P/lib/systemd/system
 if command -v systemd-analyze >/dev/null 2>&1; then
-    check "systemd-analyze verify (installed man pages for Documentation=)"
-    st=0
-    MANPATH=$P/share/man systemd-analyze verify \
-        "$P/lib/systemd/system/wsgemu.service" >"$S/verify.out" 2>&1 || st=$?
-    # It reports an unknown key or a bad value, but exits 0 for it.
-    if [ "$st" != 0 ] || [ -s "$S/verify.out" ]; then
-        show "$S/verify.out"
-        fail "systemd-analyze verify: status $st, or it reported something"
+    for u in wsgemu.service wsgemu@.service; do
+        # The template is verified as its instance wsgemu@i.service.
+        check "systemd-analyze verify $u (installed man pages for Documentation=)"
+        st=0
+        MANPATH=$P/share/man systemd-analyze verify "$U/$u" \
+            >"$S/verify.out" 2>&1 || st=$?
+        # It reports an unknown key or a bad value, but exits 0 for it.
+        if [ "$st" != 0 ] || [ -s "$S/verify.out" ]; then
+            show "$S/verify.out"
+            fail "systemd-analyze verify $u: status $st, or it reported something"
+        fi
+    done
+    # The sandbox: systemd's own rating of the exposure, 0.0 (none) to
+    # 10.0, of the unit file as it is (--offline, systemd 250 and later).
+    if systemd-analyze security --help 2>&1 | grep -q -- --offline; then
+        for u in wsgemu.service wsgemu@.service; do
+            check "systemd-analyze security --offline=true $u: exposure 2.0 or lower"
+            st=0
+            systemd-analyze security --offline=true "$U/$u" \
+                >"$S/security.out" 2>&1 || st=$?
+            level=$(sed -n 's/.*Overall exposure level for [^:]*: \([0-9.]*\).*/\1/p' \
+                "$S/security.out")
+            [ "$st" = 0 ] && [ -n "$level" ] ||
+                { show "$S/security.out"; fail "systemd-analyze security $u: status $st, no level"; }
+            echo "    exposure $level"
+            awk -v l="$level" 'BEGIN { exit !(l <= 2.0) }' ||
+                { show "$S/security.out"; fail "$u: exposure $level, above 2.0"; }
+        done
+    else
+        check "systemd-analyze here has no --offline: the sandbox is not rated (skipped)"
     fi
 else
-    check "no systemd-analyze here: the unit is not verified (skipped)"
+    check "no systemd-analyze here: the units are not verified (skipped)"
 fi
-check "the package's unit is the verified one but for ExecStart's paths"
-grep -v '^ExecStart=' "$P/lib/systemd/system/wsgemu.service" >"$S/unit.prefix"
-grep -v '^ExecStart=' "$S/deb.service" >"$S/unit.deb"
-diff "$S/unit.prefix" "$S/unit.deb" >&2 ||
-    fail "the package's unit differs from the installed one"
+check "the template's sandbox is the unit's, line for line"
+# Only the description, the config file and the directories named after
+# the instance differ (and the leading comments).
+for u in wsgemu.service wsgemu@.service; do
+    sed -e '/^#/d' -e '/^Description=/d' -e '/^ExecStart=/d' \
+        -e '/^[A-Za-z]*Directory=/d' "$U/$u" >"$S/sandbox.$u"
+done
+diff "$S/sandbox.wsgemu.service" "$S/sandbox.wsgemu@.service" >&2 ||
+    fail "wsgemu@.service differs from wsgemu.service in more than its instance's names"
+grep -qx 'StateDirectory=wsgemu-%i' "$U/wsgemu@.service" ||
+    fail "the template has no state directory of the instance's own"
+for u in wsgemu.service wsgemu@.service; do
+    check "the package's $u is the installed one but for ExecStart's paths"
+    grep -v '^ExecStart=' "$U/$u" >"$S/unit.prefix"
+    grep -v '^ExecStart=' "$S/deb.$u" >"$S/unit.deb"
+    diff "$S/unit.prefix" "$S/unit.deb" >&2 ||
+        fail "the package's $u differs from the installed one"
+done
 echo "package: all checks passed"
