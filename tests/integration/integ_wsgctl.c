@@ -36,6 +36,18 @@
  *   daemon gets no answer (exit 3) and still leaves it out of FAST STOP;
  *   the text daemon, too, is not in FAST STOP at the end (every close
  *   announced with BYE());
+ * - the control channel's part, obstacle, fault, time, drop and reset
+ *   through --control, each seen in the channel's state; the channel's
+ *   refusals (exit 1) and usage errors (exit 2), and none without
+ *   --control or WSG_CONTROL;
+ * - --opt=value, WSG_HOST, WSG_PORT and WSG_CONTROL set for the child,
+ *   the command line winning over them;
+ * - --json objects of readings, actions, failures (the gripper's status,
+ *   the reason, the exit status), watch, raw, usage errors and the
+ *   control channel's answers;
+ * - wait-ready: at once against the daemon, a failure within --timeout
+ *   against a closed port, and a wait through a daemon started 0.5 s
+ *   later on a fixed free port;
  * - at the end the gripper is not in FAST STOP: every wsgctl close over
  *   TCP was announced with 07h.
  *
@@ -52,11 +64,13 @@
 #include <arpa/inet.h>
 #include <fcntl.h>
 #include <netinet/in.h>
+#include <signal.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/socket.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 /* A bound on one run of wsgctl (its own --timeout is 10 s by default). */
@@ -64,11 +78,11 @@
 
 struct env {
     const char *ctl;
-    char tcp[160];  /* HOST:PORT of the daemon */
-    char udp[160];  /* HOST:PORT:LOCAL for wsgctl */
-    char pty[160];  /* "" without pseudo-terminals */
-    char out[8192]; /* last run's stdout */
-    char err[4096]; /* last run's stderr */
+    char tcp[160];   /* HOST:PORT of the daemon */
+    char udp[160];   /* HOST:PORT:LOCAL for wsgctl */
+    char pty[160];   /* "" without pseudo-terminals */
+    char out[16384]; /* last run's stdout (--help is long) */
+    char err[4096];  /* last run's stderr */
 };
 
 /* A port nobody uses right now (bound, then released). */
@@ -534,6 +548,292 @@ static void test_script(struct env *v, struct emu *e)
     rmdir(dir);
 }
 
+/* The control channel's scenario commands through wsgctl --control: each
+ * changes the world as the channel's own "state" shows; the channel's
+ * refusals are exit 1 with its reason, its usage errors and a missing
+ * --control exit 2. */
+static void test_channel(struct env *v, struct emu *e)
+{
+    struct emu_client c;
+    char addr[64];
+    struct ctl k;
+    const char *st;
+
+    REQUIRE(emu_field(e, "control", addr, sizeof addr) != NULL);
+    REQUIRE(ctl_open(&k, e) == 0);
+
+    CHECK_EQ(CONTROL(v, addr, "part", "40"), 0);
+    CHECK(!strncmp(v->out, "part 40 ", 8) && count_lines(v->out) == 1);
+    CHECK(has(ctl_cmd(&k, "state"), "\"part\":{\"width\":40.000,"));
+    CHECK_EQ(CONTROL(v, addr, "part", "30", "80"), 0);
+    CHECK(!strcmp(v->out, "part 30 80\n"));
+    CHECK(has(ctl_cmd(&k, "state"),
+              "\"part\":{\"width\":30.000,\"stiffness\":80}"));
+    CHECK_EQ(CONTROL(v, addr, "part", "none"), 0);
+    CHECK(has(ctl_cmd(&k, "state"), "\"part\":null"));
+    CHECK_EQ(CONTROL(v, addr, "obstacle", "25"), 0);
+    CHECK(!strcmp(v->out, "obstacle 25\n"));
+    CHECK(has(ctl_cmd(&k, "state"), "\"obstacle\":25.000}"));
+    CHECK_EQ(CONTROL(v, addr, "obstacle", "none"), 0);
+    CHECK(has(ctl_cmd(&k, "state"), "\"obstacle\":null}"));
+    CHECK_EQ(CONTROL(v, addr, "fault", "temp-warning", "on"), 0);
+    CHECK(!strcmp(v->out, "fault temp-warning on\n"));
+    CHECK(has(ctl_cmd(&k, "state"), "\"temp_warning\""));
+    CHECK_EQ(CONTROL(v, addr, "fault", "temp-warning", "off"), 0);
+    CHECK(!has(ctl_cmd(&k, "state"), "\"temp_warning\""));
+
+    /* Time: paused, stepped exactly, resumed. */
+    CHECK_EQ(CONTROL(v, addr, "time", "pause"), 0);
+    CHECK(!strcmp(v->out, "paused\n"));
+    CHECK(has(ctl_cmd(&k, "state"), "\"paused\":true"));
+    st = ctl_cmd(&k, "time");
+    {
+        long long before = ctl_time_us(st), after;
+
+        CHECK_EQ(CONTROL(v, addr, "time", "step", "10"), 0);
+        after = ctl_time_us(ctl_cmd(&k, "time"));
+        CHECK(before >= 0 && after == before + 10000);
+    }
+    CHECK_EQ(CONTROL(v, addr, "time"), 0);
+    CHECK(atof(v->out) > 0.0 && count_lines(v->out) == 1);
+    CHECK_EQ(CONTROL(v, addr, "time", "resume"), 0);
+    CHECK(!strncmp(v->out, "running at scale ", 17));
+    CHECK(has(ctl_cmd(&k, "state"), "\"paused\":false"));
+
+    /* The channel refuses: its reason, exit 1. */
+    CHECK_EQ(CONTROL(v, addr, "part", "500"), 1);
+    CHECK(has(v->err, "part: WIDTH must be a number of mm"));
+    CHECK_EQ(CONTROL(v, addr, "fault", "bogus", "on"), 1);
+    CHECK(has(v->err, "unknown fault 'bogus'"));
+    CHECK_EQ(CONTROL(v, addr, "time", "step", "10"), 1);
+    CHECK(has(v->err, "not paused"));
+    /* Malformed: exit 2, by wsgctl's count or the channel's "usage". */
+    CHECK_EQ(CONTROL(v, addr, "part"), 2);
+    CHECK_EQ(CONTROL(v, addr, "fault", "power"), 2);
+    CHECK_EQ(CONTROL(v, addr, "time", "step"), 2);
+    CHECK(has(v->err, "usage: time"));
+    CHECK_EQ(CONTROL(v, addr, "part", "4 0"), 2);
+    CHECK(has(v->err, "blank"));
+    CHECK_EQ(TCP(v, "part", "40"), 2);
+    CHECK(has(v->err, "part needs --control"));
+    CHECK_EQ(ctl(v, NULL, NULL, "drop", (char *)NULL), 2);
+    CHECK(has(v->err, "WSG_CONTROL"));
+    CHECK(has(ctl_cmd(&k, "state"), "\"part\":null"));
+
+    /* drop: a connection closed without 07h, so FAST STOP, as a real
+     * link loss; acknowledged again afterwards. */
+    REQUIRE(emu_open(&c, e, &emu_tcp) == 0);
+    CHECK_EQ(CONTROL(v, addr, "drop"), 0);
+    CHECK(has(v->out, "dropped ") && atoi(v->out + 8) >= 1);
+    emu_close(&c);
+    CHECK(has(ctl_cmd(&k, "state"), "\"fast_stop\""));
+    CHECK_EQ(TCP(v, "ack"), 0);
+    CHECK(!has(ctl_cmd(&k, "state"), "\"fast_stop\""));
+
+    /* reset: a power cycle, not referenced afterwards. */
+    CHECK(has(ctl_cmd(&k, "state"), "\"referenced\""));
+    CHECK_EQ(CONTROL(v, addr, "reset"), 0);
+    CHECK(!strcmp(v->out, "reset\n"));
+    CHECK(!has(ctl_cmd(&k, "state"), "\"referenced\""));
+    CHECK_EQ(TCP(v, "home"), 0);
+    ctl_close(&k);
+}
+
+/* --opt=value for options with a value, none for those without; the
+ * gripper's address from WSG_HOST and WSG_PORT, the channel's from
+ * WSG_CONTROL, each only when the line names no interface. */
+static void test_options_env(struct env *v, struct emu *e)
+{
+    char addr[64], tcp[200], port[16], closed[64];
+    const char *colon = strrchr(v->tcp, ':');
+
+    REQUIRE(emu_field(e, "control", addr, sizeof addr) != NULL);
+    REQUIRE(colon != NULL);
+    snprintf(port, sizeof port, "%s", colon + 1);
+    snprintf(tcp, sizeof tcp, "--tcp=%s", v->tcp);
+    snprintf(closed, sizeof closed, "127.0.0.1:%u", free_port(SOCK_STREAM));
+
+    CHECK_EQ(
+        ctl(v, NULL, NULL, tcp, "--timeout=5", "-q", "width", (char *)NULL),
+        0);
+    CHECK(!strcmp(v->out, "110.00\n"));
+    CHECK_EQ(ctl(v, NULL, NULL, tcp, "--timeout=soon", "width", (char *)NULL),
+             2);
+    CHECK(has(v->err, "--timeout: seconds"));
+    CHECK_EQ(ctl(v, NULL, NULL, tcp, "--quiet=1", "width", (char *)NULL), 2);
+    CHECK(has(v->err, "--quiet takes no value"));
+    CHECK_EQ(
+        ctl(v, NULL, NULL, tcp, "watch", "width", "--count=2", (char *)NULL),
+        0);
+    CHECK_EQ(count_lines(v->out), 2);
+    CHECK_EQ(ctl(v, "--control", addr, "part", "none", (char *)NULL), 0);
+
+    setenv("WSG_HOST", "127.0.0.1", 1);
+    setenv("WSG_PORT", port, 1);
+    CHECK_EQ(ctl(v, NULL, NULL, "-q", "width", (char *)NULL), 0);
+    CHECK(!strcmp(v->out, "110.00\n"));
+    /* WSG_HOST alone: the default port (1000), where nothing listens
+     * here, or something else: not this gripper's answer anyway. */
+    setenv("WSG_PORT", "0x10000", 1);
+    CHECK_EQ(ctl(v, NULL, NULL, "width", (char *)NULL), 2);
+    CHECK(has(v->err, "WSG_PORT"));
+    /* The line wins: --tcp over a WSG_PORT where nothing listens. */
+    setenv("WSG_PORT", strrchr(closed, ':') + 1, 1);
+    CHECK_EQ(ctl(v, NULL, NULL, "--timeout", "2", "width", (char *)NULL), 3);
+    CHECK_EQ(ctl(v, NULL, NULL, tcp, "-q", "width", (char *)NULL), 0);
+    CHECK(!strcmp(v->out, "110.00\n"));
+    unsetenv("WSG_HOST");
+    unsetenv("WSG_PORT");
+
+    setenv("WSG_CONTROL", addr, 1);
+    CHECK_EQ(ctl(v, NULL, NULL, "obstacle", "70", (char *)NULL), 0);
+    CHECK(!strcmp(v->out, "obstacle 70\n"));
+    CHECK_EQ(ctl(v, NULL, NULL, "-q", "script", "status", (char *)NULL), 0);
+    CHECK(has(v->out, "\"running\":false"));
+    /* The line wins here too: a --control where nothing listens. */
+    CHECK_EQ(ctl(v, "--control", closed, "obstacle", "none", (char *)NULL), 3);
+    /* WSG_CONTROL is not the gripper's interface: readings go to TCP. */
+    CHECK_EQ(ctl(v, NULL, NULL, "--tcp", v->tcp, "-q", "width", (char *)NULL),
+             0);
+    CHECK_EQ(ctl(v, NULL, NULL, "obstacle", "none", (char *)NULL), 0);
+    unsetenv("WSG_CONTROL");
+}
+
+/* --json: one object per command, its fields by the control channel's
+ * names, failures with "error" and "exit". */
+static void test_json(struct env *v, struct emu *e)
+{
+    char addr[64];
+
+    REQUIRE(emu_field(e, "control", addr, sizeof addr) != NULL);
+    CHECK_EQ(TCP(v, "--json", "width"), 0);
+    CHECK(!strcmp(v->out, "{\"command\":\"width\",\"status\":\"E_SUCCESS\","
+                          "\"width\":110}\n"));
+    CHECK_EQ(TCP(v, "--json", "move", "40.5", "100"), 0);
+    CHECK(
+        !strcmp(v->out, "{\"command\":\"move\",\"status\":\"E_SUCCESS\"}\n"));
+    CHECK_EQ(TCP(v, "--json", "state"), 0);
+    /* The flags by number and by name (the failed script of
+     * test_script left SF_SCRIPT_FAILURE set). */
+    CHECK(!strncmp(v->out,
+                   "{\"command\":\"state\",\"status\":\"E_SUCCESS\","
+                   "\"flags\":",
+                   45) &&
+          has(v->out, ",\"flags_names\":[\"SF_REFERENCED\","
+                      "\"SF_TARGET_POS_REACHED\"") &&
+          has(v->out, "],\"grasp_state\":0,\"grasp_state_name\":\"IDLE\"}"
+                      "\n"));
+    CHECK_EQ(TCP(v, "--json", "info"), 0);
+    CHECK(has(v->out, "\"swrev\":\"2.2.0\"") && has(v->out, "\"serial\":1"));
+    CHECK_EQ(TCP(v, "--json", "tag"), 0);
+    CHECK(has(v->out, "\"tag\":\"bench-1\"}")); /* set in test_tcp */
+    CHECK_EQ(TCP(v, "--json", "soft-limits"), 0);
+    CHECK(has(v->out, "\"soft_limits\":null}"));
+    CHECK_EQ(TCP(v, "--json", "loop", "say \"hi\"\\"), 0);
+    CHECK(has(v->out, "\"echo\":\"say \\\"hi\\\"\\\\\""));
+    CHECK_EQ(TCP(v, "--json", "grasp", "20", "50"), 1);
+    CHECK(!strcmp(v->out, "{\"command\":\"grasp\",\"status\":"
+                          "\"E_CMD_FAILED\",\"error\":\"25h Grasp: "
+                          "E_CMD_FAILED\",\"exit\":1}\n"));
+    CHECK(has(v->err, "E_CMD_FAILED")); /* said on stderr too */
+    CHECK_EQ(TCP(v, "--json", "release", "60", "50"), 0);
+    CHECK_EQ(TCP(v, "--json", "watch", "width", "--count", "2"), 0);
+    CHECK_EQ(count_lines(v->out), 2);
+    CHECK(!strncmp(v->out, "{\"command\":\"watch\",", 19) &&
+          has(v->out, ",\"time\":") && has(v->out, ",\"width\":60}\n"));
+    CHECK_EQ(TCP(v, "--json", "raw", "0x43"), 0);
+    CHECK(has(v->out, "\"id\":67,\"params\":\"00 00 70 42\",\"width\":60}"));
+    /* Usage errors too, wherever --json stands. */
+    CHECK_EQ(TCP(v, "move", "ten", "20", "--json"), 2);
+    CHECK(!strncmp(v->out,
+                   "{\"command\":\"move\",\"error\":\"width: not a "
+                   "number",
+                   45) &&
+          has(v->out, "\"exit\":2}\n"));
+    CHECK_EQ(TCP(v, "--json", "decode"), 2);
+    /* The control channel: readings, its commands' answers, refusals. */
+    CHECK_EQ(CONTROL(v, addr, "--json", "width"), 0);
+    CHECK(!strcmp(v->out, "{\"command\":\"width\",\"width\":60}\n"));
+    CHECK_EQ(CONTROL(v, addr, "--json", "part", "40"), 0);
+    CHECK(
+        !strcmp(v->out, "{\"command\":\"part\",\"answer\":\"part 40 50\"}\n"));
+    CHECK_EQ(CONTROL(v, addr, "--json", "part", "500"), 1);
+    CHECK(has(v->out, "\"error\":\"part: WIDTH must be") &&
+          has(v->out, "\"exit\":1}\n") && !has(v->out, "\"status\""));
+    CHECK_EQ(CONTROL(v, addr, "--json", "script", "status"), 0);
+    CHECK(!strncmp(
+        v->out, "{\"command\":\"script\",\"answer\":{\"running\":false,", 46));
+    CHECK_EQ(CONTROL(v, addr, "part", "none"), 0);
+}
+
+/* wait-ready: at once against a running gripper, a failure within its
+ * --timeout against a closed port, and a wait through a gripper that is
+ * started only after half a second. */
+static void test_wait_ready(struct env *v, const char *exe, struct emu *e)
+{
+    char addr[64], closed[64], late[64];
+    const char *args[] = {"--tcp", late, (char *)NULL};
+    const char *wargs[] = {v->ctl, "--tcp",      late,        "--timeout",
+                           "",     "wait-ready", (char *)NULL};
+    char timeout[32];
+    double t0, took;
+    struct emu d;
+    pid_t pid;
+    int status = -1, waited = 0;
+
+    REQUIRE(emu_field(e, "control", addr, sizeof addr) != NULL);
+    CHECK_EQ(TCP(v, "wait-ready"), 0);
+    CHECK(!strcmp(v->out, ""));
+    CHECK_EQ(TCP(v, "--json", "wait-ready"), 0);
+    CHECK(has(v->out, "{\"command\":\"wait-ready\",\"waited\":"));
+    CHECK_EQ(CONTROL(v, addr, "wait-ready"), 0);
+
+    snprintf(closed, sizeof closed, "127.0.0.1:%u", free_port(SOCK_STREAM));
+    t0 = emu_now_ms();
+    CHECK_EQ(
+        ctl(v, "--tcp", closed, "--timeout", "1", "wait-ready", (char *)NULL),
+        3);
+    took = emu_now_ms() - t0;
+    printf("wait-ready on a closed port: %.0f ms\n", took);
+    CHECK(took >= 900.0 && took < 1000.0 + emu_ms(3000));
+    CHECK(has(v->err, "not ready within 1.0 s: cannot connect"));
+
+    /* Started late: wsgctl is already waiting when the daemon comes. */
+    snprintf(late, sizeof late, "127.0.0.1:%u", free_port(SOCK_STREAM));
+    snprintf(timeout, sizeof timeout, "%.1f", 10.0 * emu_time_scale());
+    wargs[4] = timeout;
+    pid = fork();
+    REQUIRE(pid >= 0);
+    if (pid == 0) {
+        int null = open("/dev/null", O_WRONLY);
+
+        if (null >= 0)
+            dup2(null, STDOUT_FILENO);
+        execv(v->ctl, (char *const *)wargs);
+        _exit(127);
+    }
+    usleep(500 * 1000);
+    CHECK_EQ(waitpid(pid, &status, WNOHANG), 0); /* still waiting */
+    REQUIRE(emu_start(&d, exe, args) == 0);
+    t0 = emu_now_ms();
+    while (emu_now_ms() - t0 < emu_ms(10000)) {
+        if (waitpid(pid, &status, WNOHANG) == pid) {
+            waited = 1;
+            break;
+        }
+        usleep(20 * 1000);
+    }
+    if (!waited) {
+        kill(pid, SIGKILL);
+        waitpid(pid, &status, 0);
+    }
+    printf("wait-ready for a late gripper: %s, status 0x%x, %.0f ms after "
+           "it started\n",
+           waited ? "ended" : "killed", status, emu_now_ms() - t0);
+    CHECK(waited && WIFEXITED(status) && WEXITSTATUS(status) == 0);
+    CHECK_EQ(emu_stop(&d), 0);
+}
+
 /* wsgctl --text: e is a daemon started with --text-interface on. */
 #define TXT(v, tcp, ...)                                                      \
     ctl((v), "--tcp", (tcp), "--text", __VA_ARGS__, (char *)NULL)
@@ -708,6 +1008,10 @@ int main(int argc, char **argv)
     test_udp_pty(&v);
     test_control_read(&v, &e);
     test_script(&v, &e);
+    test_channel(&v, &e);
+    test_options_env(&v, &e);
+    test_json(&v, &e);
+    test_wait_ready(&v, exe, &e);
     test_text(&v, exe);
     check_no_fast_stop(&e);
 

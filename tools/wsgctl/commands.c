@@ -35,7 +35,14 @@ static int simple(struct ctx *x, uint8_t id, const uint8_t *payload,
     if (rc)
         return rc;
     if (none_ok && r.status == WSG_E_NOT_AVAILABLE) {
-        printf(x->o.quiet ? "none\n" : "%s none\n", x->command);
+        if (x->o.jo) {
+            /* Not set is no error: null under the reading's key. */
+            x->o.jo->status = WSG_E_SUCCESS;
+            jout_add(x->o.jo, ",\"%s\":null",
+                     id == WSG_CMD_GET_DEVICE_TAG ? "tag" : "soft_limits");
+        } else {
+            printf(x->o.quiet ? "none\n" : "%s none\n", x->command);
+        }
         return EXIT_OK;
     }
     if (r.status != WSG_E_SUCCESS)
@@ -276,8 +283,12 @@ int c_loop(struct ctx *x, int argc, char **argv)
     if (r.status != WSG_E_SUCCESS)
         return gripper_error(WSG_CMD_LOOP, r.status);
     /* The echo comes back as status plus data, the data being ours. */
-    printf("%.*s\n", (int)WSG_CLIENT_NPARAMS(&r),
-           (const char *)WSG_CLIENT_PARAMS(&r));
+    if (x->o.jo)
+        jout_str(x->o.jo, "echo", (const char *)WSG_CLIENT_PARAMS(&r),
+                 WSG_CLIENT_NPARAMS(&r));
+    else
+        printf("%.*s\n", (int)WSG_CLIENT_NPARAMS(&r),
+               (const char *)WSG_CLIENT_PARAMS(&r));
     return EXIT_OK;
 }
 
@@ -370,9 +381,25 @@ int c_raw(struct ctx *x, int argc, char **argv)
             return EXIT_USAGE;
         }
     }
-    rc = xact(x, (uint8_t)id, pl, n, &r, print_reply);
+    rc = xact(x, (uint8_t)id, pl, n, &r, x->o.jo ? NULL : print_reply);
     if (rc)
         return rc;
-    print_reply(&x->o, &r);
+    if (x->o.jo) {
+        /* The final answer: its ID, its parameters in hex as printed,
+         * the values of a known ID. */
+        char hex[3 * WSG_REPLY_PARAMS_MAX + 1];
+        size_t np = WSG_CLIENT_NPARAMS(&r), k = 0;
+
+        for (size_t i = 0; i < np && k + 4 <= sizeof hex; i++)
+            k += (size_t)snprintf(hex + k, sizeof hex - k, "%s%02X",
+                                  i ? " " : "", WSG_CLIENT_PARAMS(&r)[i]);
+        hex[k] = '\0';
+        jout_add(x->o.jo, ",\"id\":%u", r.id);
+        jout_str(x->o.jo, "params", hex, k);
+        if (r.status == WSG_E_SUCCESS)
+            print_values(&x->o, "", r.id, WSG_CLIENT_PARAMS(&r), np);
+    } else {
+        print_reply(&x->o, &r);
+    }
     return r.status == WSG_E_SUCCESS ? EXIT_OK : gripper_error(r.id, r.status);
 }

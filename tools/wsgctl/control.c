@@ -1,9 +1,12 @@
 /*
- * wsgctl --control: readings through the emulator's control channel
+ * wsgctl --control: the emulator's control channel. Readings through it
  * instead of the gripper's interface, so a tool can look while a driver
- * moves the gripper without disturbing it (no 07h, no session). The
+ * moves the gripper without disturbing it (no 07h, no session): the
  * channel's "state" line is put into the reply layout the gripper would
- * have sent, and printed as that.
+ * have sent, and printed as that. And the channel's scenario commands
+ * (part, obstacle, fault, time, drop, reset), sent as the line they are
+ * and answered with what the channel answers; control_line is the one
+ * exchange of a line they and the scripts (script.c) share.
  */
 #define _GNU_SOURCE /* getaddrinfo, sigaction, localtime_r */
 
@@ -81,5 +84,77 @@ int control_read(struct ctx *x, uint8_t id, const uint8_t *payload, size_t len)
     }
     np = wsg_layout_encode(layout, v, p);
     print_values(&x->o, "", id, p, np);
+    return EXIT_OK;
+}
+
+/* One command line to the channel and its answer. The text after "ok "
+ * into *rest and 0; an "error" answer is said as the emulator's reason
+ * (exit 1: it refused, as a gripper answers an error status; exit 2 for
+ * "error usage: ...", the channel's word for a malformed command), a dead
+ * or silent channel as such (exit 3). */
+int control_line(struct ctx *x, const char *cmd, char *line, size_t cap,
+                 const char **rest)
+{
+    int r = wsg_client_line(&x->c.l, cmd, line, cap, timeout_deadline(&x->o));
+
+    if (r == -EMSGSIZE) {
+        err("the line \"%s\" is too long for the control channel", cmd);
+        return EXIT_USAGE;
+    }
+    if (r == 0) {
+        err("control channel: no answer to \"%s\"", cmd);
+        return EXIT_CONN;
+    }
+    if (r < 0) {
+        err("control channel: %s", r == -EPIPE ? "closed" : strerror(-r));
+        return r == -EINTR ? EXIT_INTERRUPTED : EXIT_CONN;
+    }
+    if (!strncmp(line, "ok", 2) && (line[2] == ' ' || line[2] == '\0')) {
+        *rest = line[2] ? line + 3 : line + 2;
+        return EXIT_OK;
+    }
+    if (!strncmp(line, "error ", 6)) {
+        err("%s", line + 6);
+        return strncmp(line + 6, "usage:", 6) ? EXIT_GRIPPER : EXIT_USAGE;
+    }
+    err("control channel: unexpected answer: %s", line);
+    return EXIT_CONN;
+}
+
+/* part, obstacle, fault, time, drop, reset: the command line as given
+ * (the name and its arguments, checked by the channel, which knows the
+ * gripper's range), and the answer without its "ok" ("part 40 50",
+ * "paused", "dropped 1"); with --json under "answer". */
+int c_channel(struct ctx *x, int argc, char **argv)
+{
+    char cmd[256], line[2048];
+    const char *rest;
+    size_t used;
+    int rc;
+
+    used = (size_t)snprintf(cmd, sizeof cmd, "%s", x->command);
+    for (int i = 0; i < argc; i++) {
+        /* The channel splits its lines at blanks: an argument with one
+         * would become two. */
+        if (!argv[i][0] || strpbrk(argv[i], " \t\r\n")) {
+            err("%s: an argument cannot be empty or hold a blank: \"%s\"",
+                x->command, argv[i]);
+            return EXIT_USAGE;
+        }
+        used += (size_t)snprintf(cmd + used,
+                                 used < sizeof cmd ? sizeof cmd - used : 0,
+                                 " %s", argv[i]);
+    }
+    if (used >= sizeof cmd) {
+        err("%s: arguments too long", x->command);
+        return EXIT_USAGE;
+    }
+    rc = control_line(x, cmd, line, sizeof line, &rest);
+    if (rc)
+        return rc;
+    if (x->o.jo)
+        jout_str(x->o.jo, "answer", rest, strlen(rest));
+    else if (rest[0])
+        puts(rest);
     return EXIT_OK;
 }

@@ -37,6 +37,11 @@ int print_values(const struct opts *o, const char *indent, uint8_t id,
 
     if (k <= 0)
         return 0;
+    if (o->jo) {
+        for (int i = 0; i < k; i++)
+            jout_value(o->jo, &v[i]);
+        return 1;
+    }
     for (int i = 0; i < k; i++) {
         const char *unit = v[i].field->unit;
 

@@ -22,8 +22,9 @@
 #include <time.h>
 #include <unistd.h>
 
+/* probe: a name not (yet) resolved is retried by wait-ready, not said. */
 static int resolve(const char *host, unsigned long port, int socktype,
-                   struct sockaddr_in *sa)
+                   struct sockaddr_in *sa, int probe)
 {
     struct addrinfo hints, *res;
     char serv[16];
@@ -35,7 +36,8 @@ static int resolve(const char *host, unsigned long port, int socktype,
     snprintf(serv, sizeof serv, "%lu", port);
     rc = getaddrinfo(host, serv, &hints, &res);
     if (rc != 0) {
-        err("%s: %s", host, gai_strerror(rc));
+        if (!probe)
+            err("%s: %s", host, gai_strerror(rc));
         return -1;
     }
     memcpy(sa, res->ai_addr, sizeof *sa);
@@ -43,7 +45,8 @@ static int resolve(const char *host, unsigned long port, int socktype,
     return 0;
 }
 
-static int open_tcp(struct conn *c, const char *addr, double timeout_s)
+static int open_tcp(struct conn *c, const char *addr, double timeout_s,
+                    int probe)
 {
     char host[256];
     unsigned long port;
@@ -54,12 +57,13 @@ static int open_tcp(struct conn *c, const char *addr, double timeout_s)
         err("bad TCP address \"%s\" (HOST:PORT)", addr);
         return -EXIT_USAGE;
     }
-    if (resolve(host, port, SOCK_STREAM, &sa) < 0)
+    if (resolve(host, port, SOCK_STREAM, &sa, probe) < 0)
         return -EXIT_CONN;
     r = wsg_client_open_tcp(&c->l, &sa, (int)(timeout_s * 1000));
     if (r < 0) {
-        err("connect to %s: %s", addr,
-            r == -ETIMEDOUT ? "timed out" : strerror(-r));
+        if (!probe)
+            err("connect to %s: %s", addr,
+                r == -ETIMEDOUT ? "timed out" : strerror(-r));
         return -EXIT_CONN;
     }
     return 0;
@@ -78,7 +82,7 @@ static int open_udp(struct conn *c, const char *addr)
         err("bad UDP address \"%s\" (HOST:PORT[:LOCAL])", addr);
         return -EXIT_USAGE;
     }
-    if (resolve(host, port, SOCK_DGRAM, &sa) < 0)
+    if (resolve(host, port, SOCK_DGRAM, &sa, 0) < 0)
         return -EXIT_CONN;
     r = wsg_client_udp_bind(htonl(INADDR_ANY), (uint16_t)local, &rfd, NULL);
     if (r < 0) {
@@ -94,10 +98,12 @@ static int open_udp(struct conn *c, const char *addr)
     return 0;
 }
 
-static int open_serial(struct conn *c, const char *path)
+static int open_serial(struct conn *c, const char *path, int probe)
 {
     int r = wsg_client_open_serial(&c->l, path);
 
+    if (r < 0 && probe)
+        return -EXIT_CONN;
     if (r == -ENOTTY)
         err("%s: not a serial port: %s", path, strerror(-r));
     else if (r < 0)
@@ -127,13 +133,13 @@ int conn_open(struct conn *c, const struct opts *o)
     c->l.on_bad = warn_bad;
     switch (o->kind) {
     case LINK_TCP:
-        return open_tcp(c, o->addr, o->timeout_s);
+        return open_tcp(c, o->addr, o->timeout_s, o->probe);
     case LINK_UDP:
         return open_udp(c, o->addr);
     case LINK_SERIAL:
-        return open_serial(c, o->addr);
+        return open_serial(c, o->addr, o->probe);
     case LINK_CONTROL:
-        return open_tcp(c, o->addr, o->timeout_s);
+        return open_tcp(c, o->addr, o->timeout_s, o->probe);
     }
     return -EXIT_USAGE;
 }
@@ -209,6 +215,10 @@ int xact(struct ctx *x, uint8_t id, const uint8_t *payload, size_t len,
         if (on_pending)
             on_pending(&x->o, r);
         rc = conn_result(&x->c, wsg_client_final(&x->c.l, r, deadline));
+    }
+    if (rc == 1 && x->o.jo) {
+        x->o.jo->has_status = 1;
+        x->o.jo->status = r->status;
     }
     return rc == 1 ? 0 : recv_fail(rc, id, &x->o);
 }

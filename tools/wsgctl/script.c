@@ -9,7 +9,7 @@
  * need: the daemon writes them, keys are unique and strings escape only
  * what JSON requires.
  */
-#define _GNU_SOURCE /* getcwd under -std=c99 */
+#define _GNU_SOURCE /* getcwd, open_memstream under -std=c99 */
 
 #include "wsgctl.h"
 
@@ -24,40 +24,6 @@
 #define SCRIPT_LINE_MAX 4096
 /* A script's path as it goes into "script run": realpath's bound. */
 #define SCRIPT_PATH_MAX 4096
-
-/* One command line to the channel and its answer. The text after "ok "
- * into *rest and 0; an "error" answer is printed as the emulator's
- * reason (exit 1: it refused, as a gripper answers an error status), a
- * dead or silent channel as such (exit 3). */
-static int script_line(struct ctx *x, const char *cmd, char *line, size_t cap,
-                       const char **rest)
-{
-    int r = wsg_client_line(&x->c.l, cmd, line, cap, timeout_deadline(&x->o));
-
-    if (r == -EMSGSIZE) {
-        err("script: the line \"%s\" is too long for the control channel",
-            cmd);
-        return EXIT_USAGE;
-    }
-    if (r == 0) {
-        err("control channel: no answer to \"%s\"", cmd);
-        return EXIT_CONN;
-    }
-    if (r < 0) {
-        err("control channel: %s", r == -EPIPE ? "closed" : strerror(-r));
-        return r == -EINTR ? EXIT_INTERRUPTED : EXIT_CONN;
-    }
-    if (!strncmp(line, "ok", 2) && (line[2] == ' ' || line[2] == '\0')) {
-        *rest = line[2] ? line + 3 : line + 2;
-        return EXIT_OK;
-    }
-    if (!strncmp(line, "error ", 6)) {
-        err("%s", line + 6);
-        return EXIT_GRIPPER;
-    }
-    err("control channel: unexpected answer: %s", line);
-    return EXIT_CONN;
-}
 
 /* ---- reading the channel's JSON ---- */
 
@@ -200,7 +166,7 @@ static int script_run(struct ctx *x, const char *file)
         }
     }
     snprintf(cmd, sizeof cmd, "script run %s", path);
-    return script_line(x, cmd, line, sizeof line, &rest);
+    return control_line(x, cmd, line, sizeof line, &rest);
 }
 
 static int script_stop(struct ctx *x)
@@ -209,7 +175,7 @@ static int script_stop(struct ctx *x)
     const char *rest;
 
     /* Not running is no error: afterwards none runs, as asked. */
-    return script_line(x, "script stop", line, sizeof line, &rest);
+    return control_line(x, "script stop", line, sizeof line, &rest);
 }
 
 static int script_status(struct ctx *x)
@@ -218,10 +184,15 @@ static int script_status(struct ctx *x)
     const char *json, *p;
     double memory, memory_max, preempted;
     size_t n;
-    int rc = script_line(x, "script status", line, sizeof line, &json);
+    int rc = control_line(x, "script status", line, sizeof line, &json);
 
     if (rc)
         return rc;
+    if (x->o.jo) {
+        /* The channel's object as it is: it is JSON already. */
+        jout_add(x->o.jo, ",\"answer\":%s", json);
+        return EXIT_OK;
+    }
     if (x->o.quiet) {
         puts(json);
         return EXIT_OK;
@@ -271,22 +242,30 @@ static int script_output(struct ctx *x)
     char line[SCRIPT_LINE_MAX], text[SCRIPT_LINE_MAX], cmd[48];
     double from = 0, next, end, stop = -1, lost, lost_total = 0;
     const char *json;
-    size_t n;
+    char *all = NULL;
+    size_t n, all_len = 0;
+    FILE *out = stdout;
     int rc;
 
+    /* --json: the whole text as one string, gathered first. */
+    if (x->o.jo && !(out = open_memstream(&all, &all_len))) {
+        err("script output: %s", strerror(errno));
+        return EXIT_CONN;
+    }
     for (;;) {
         snprintf(cmd, sizeof cmd, "script output %.0f", from);
-        rc = script_line(x, cmd, line, sizeof line, &json);
+        rc = control_line(x, cmd, line, sizeof line, &json);
         if (rc)
-            return rc;
+            goto out;
         if (json_str(json, "text", text, sizeof text, &n) != 1 ||
             wsg_json_num(json, "lost", &lost) ||
             wsg_json_num(json, "next", &next) ||
             wsg_json_num(json, "end", &end)) {
             err("control channel: unexpected script output: %s", json);
-            return EXIT_CONN;
+            rc = EXIT_CONN;
+            goto out;
         }
-        fwrite(text, 1, n, stdout);
+        fwrite(text, 1, n, out);
         lost_total += lost;
         if (stop < 0)
             stop = end;
@@ -294,11 +273,21 @@ static int script_output(struct ctx *x)
             break;
         from = next;
     }
-    if (lost_total > 0 && !x->o.quiet)
+    if (lost_total > 0 && !x->o.quiet && !x->o.jo)
         err("script output: the first %.0f bytes are no longer kept (the "
             "emulator keeps the last 64 KiB)",
             lost_total);
-    return EXIT_OK;
+    rc = EXIT_OK;
+out:
+    if (out != stdout) {
+        fclose(out);
+        if (rc == EXIT_OK) {
+            jout_str(x->o.jo, "text", all, all_len);
+            jout_add(x->o.jo, ",\"lost\":%.0f", lost_total);
+        }
+        free(all);
+    }
+    return rc;
 }
 
 int c_script(struct ctx *x, int argc, char **argv)

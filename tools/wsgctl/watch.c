@@ -87,9 +87,26 @@ int c_watch(struct ctx *x, int argc, char **argv)
             break;
         }
         deadline = wsg_client_deadline(gap);
-        print_stamp(&x->o);
-        print_values(&x->o, "", id, WSG_CLIENT_PARAMS(&r),
-                     WSG_CLIENT_NPARAMS(&r));
+        if (x->o.jo) {
+            /* One object a value, as it comes: JSON lines. */
+            struct timespec ts;
+
+            clock_gettime(CLOCK_REALTIME, &ts);
+            x->o.jo->len = 0;
+            x->o.jo->body[0] = '\0';
+            jout_add(x->o.jo, ",\"time\":%lld.%03ld", (long long)ts.tv_sec,
+                     ts.tv_nsec / 1000000);
+            print_values(&x->o, "", id, WSG_CLIENT_PARAMS(&r),
+                         WSG_CLIENT_NPARAMS(&r));
+            jout_print(x->o.jo, x->command, EXIT_OK, "");
+            x->o.jo->streamed = 1;
+            x->o.jo->len = 0;
+            x->o.jo->body[0] = '\0';
+        } else {
+            print_stamp(&x->o);
+            print_values(&x->o, "", id, WSG_CLIENT_PARAMS(&r),
+                         WSG_CLIENT_NPARAMS(&r));
+        }
         fflush(stdout);
         got++;
     }

@@ -24,7 +24,8 @@
 #define EXIT_CONN        3 /* cannot connect, I/O error, no answer in time */
 #define EXIT_INTERRUPTED 130
 
-#define DEFAULT_TCP      "127.0.0.1:1000"
+#define DEFAULT_HOST     "127.0.0.1" /* without --tcp and WSG_HOST */
+#define DEFAULT_PORT     1000        /* without --tcp and WSG_PORT */
 #define DEFAULT_UDP_PORT 1501 /* where the gripper sends its UDP answers */
 
 /* Set by SIGINT/SIGTERM (main.c); a flag, since the handler may do
@@ -35,9 +36,29 @@ extern volatile sig_atomic_t interrupted;
  * control_read). */
 enum link_kind { LINK_TCP, LINK_UDP, LINK_SERIAL, LINK_CONTROL };
 
+/* --json: the object of the command running, gathered as it runs
+ * (json.c). */
+struct jout {
+    char body[72 * 1024]; /* its fields, each with a leading comma; room
+                           * for a script's output (64 KiB kept) */
+    size_t len;
+    int cut;        /* a field did not fit */
+    int gripper;    /* the gripper was asked: "status" on success */
+    int has_status; /* the gripper answered with status */
+    int streamed;   /* watch printed an object a value already */
+    unsigned status;
+};
+
+/* stderr gathered while a command runs under --json (json.c). */
+struct json_capture {
+    FILE *file;
+    int saved; /* the real stderr */
+};
+
 struct opts {
     enum link_kind kind;
     const char *addr;
+    int addr_given; /* --tcp, --udp, --serial or --control on the line */
     double timeout_s;
     int quiet;
     int relative;
@@ -46,7 +67,9 @@ struct opts {
     long count; /* watch: stop after this many values; 0: until SIGINT */
     int text;   /* --text: GCL lines instead of binary packets (text.c) */
     int has_force;
-    double force; /* --force N: GCL's GRIP(force, ...) */
+    double force;    /* --force N: GCL's GRIP(force, ...) */
+    int probe;       /* wait-ready: a failure to connect is retried, unsaid */
+    struct jout *jo; /* --json: where the values go; NULL without */
 };
 
 /* The link to the gripper, and whether its close was announced. */
@@ -65,8 +88,13 @@ struct ctx {
     const char *command; /* wsgctl's name of the command running */
 };
 
+/* Where a command can go: the gripper's interface only (the default, 0),
+ * also through the emulator's control channel (readings it holds), or
+ * only there (the channel's scenario commands and scripts). */
+enum via { VIA_GRIPPER, VIA_BOTH, VIA_CONTROL };
+
 /* A command of wsgctl: its runner, how many positional arguments, whether
- * it needs the link, and its usage lines. */
+ * it needs the link, its usage lines, and where it can go. */
 struct command {
     const char *name;
     int (*run)(struct ctx *x, int argc, char **argv);
@@ -75,6 +103,7 @@ struct command {
     const char *args; /* for usage */
     const char *what;
     const char *example;
+    enum via via;
 };
 
 typedef void (*pending_fn)(const struct opts *o,
@@ -139,10 +168,28 @@ const char *cmd_name(uint8_t id);
 int gripper_error(uint8_t id, unsigned status);
 int c_decode(struct ctx *x, int argc, char **argv);
 
-/* ---- readings through the control channel (control.c) ---- */
+/* ---- the control channel (control.c) ---- */
 
 int control_read(struct ctx *x, uint8_t id, const uint8_t *payload,
                  size_t len);
+int control_line(struct ctx *x, const char *cmd, char *line, size_t cap,
+                 const char **rest);
+int c_channel(struct ctx *x, int argc, char **argv);
+
+/* ---- waiting for the gripper (ready.c) ---- */
+
+int c_wait_ready(struct ctx *x, int argc, char **argv);
+
+/* ---- --json (json.c) ---- */
+
+void jout_add(struct jout *j, const char *fmt, ...);
+void jout_str(struct jout *j, const char *key, const char *s, size_t n);
+void jout_value(struct jout *j, const struct wsg_value *v);
+void jout_print(const struct jout *j, const char *command, int rc,
+                const char *error);
+void json_write_str(FILE *f, const char *s, size_t n);
+int json_capture_begin(struct json_capture *c);
+void json_capture_end(struct json_capture *c, char *last, size_t cap);
 
 /* ---- GCL, the text interface (text.c) ---- */
 
