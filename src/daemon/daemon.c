@@ -70,9 +70,19 @@ static void on_signal(struct wsg_watch *w, uint32_t events)
     struct signalfd_siginfo si;
 
     (void)events;
-    while (read(w->fd, &si, sizeof si) == (ssize_t)sizeof si)
+    while (read(w->fd, &si, sizeof si) == (ssize_t)sizeof si) {
         if (si.ssi_signo == SIGINT || si.ssi_signo == SIGTERM)
             wsg_reactor_stop(&d->reactor);
+        else if (si.ssi_signo == SIGHUP && d->opt.log_path) {
+            /* logrotate renamed the file: lines go to a new one at the
+             * path. */
+            char err[512];
+
+            if (wsg_log_reopen(&d->log, d->opt.log_path, err, sizeof err))
+                fprintf(stderr, "wsgemu: %s; logging on to the old file\n",
+                        err);
+        }
+    }
 }
 
 static int open_transport(struct wsg_gripper *g,
@@ -244,6 +254,7 @@ static int open_signals(struct wsg_daemon *d)
     sigemptyset(&mask);
     sigaddset(&mask, SIGINT);
     sigaddset(&mask, SIGTERM);
+    sigaddset(&mask, SIGHUP); /* reopen the log */
     if (sigprocmask(SIG_BLOCK, &mask, NULL) < 0)
         return -errno;
     fd = signalfd(-1, &mask, SFD_NONBLOCK | SFD_CLOEXEC);

@@ -653,7 +653,8 @@ static const struct wsg_setting settings[] = {
      .section = WSG_SECTION_EMULATOR,
      .arg = "FILE",
      .help = "communication log: one line per\n"
-             "packet; '-' for stderr"},
+             "packet and per event; '-' for\n"
+             "stderr; SIGHUP opens FILE again"},
     {.name = "config",
      .type = WSG_SETTING_CONFIG,
      .at = WSG_AT(config_path),
