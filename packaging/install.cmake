@@ -14,6 +14,8 @@
 #                                   is kept, as it holds the admin's edits
 #   UNITDIR/wsgemu.service          with ExecStart naming this prefix's
 #                                   program and config file
+#   SYSCONFDIR/logrotate.d/wsgemu   packaging/wsgemu.logrotate; an existing
+#                                   file is kept, like the config file
 # Absolute paths come from GNUInstallDirs' own rule, applied to the prefix
 # of this install: /etc for the prefixes / and /usr, /etc/opt/X for /opt/X,
 # else PREFIX/etc; other directories below the prefix unless absolute.
@@ -36,6 +38,14 @@ if(EXISTS "$ENV{DESTDIR}${wsg_confdir}/wsgemu.conf")
 else()
   file(INSTALL DESTINATION "${wsg_confdir}" TYPE FILE
        FILES "${WSG_PKG_SRC}/wsgemu.conf")
+endif()
+
+# The logrotate snippet, kept like the config file.
+if(EXISTS "$ENV{DESTDIR}${wsg_etc}/logrotate.d/wsgemu")
+  message(STATUS "Keeping: $ENV{DESTDIR}${wsg_etc}/logrotate.d/wsgemu")
+else()
+  file(INSTALL DESTINATION "${wsg_etc}/logrotate.d" TYPE FILE
+       FILES "${WSG_PKG_SRC}/wsgemu.logrotate" RENAME wsgemu)
 endif()
 
 # The unit: the source names the Debian paths; write this install's.

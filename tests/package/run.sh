@@ -172,7 +172,7 @@ DOC=share/doc/wsgemu
 check "every file is installed"
 has_files "$P" bin/wsgemu bin/wsgctl \
     etc/wsgemu/wsgemu.conf "$DOC/examples/wsgemu.conf" \
-    lib/systemd/system/wsgemu.service \
+    etc/logrotate.d/wsgemu lib/systemd/system/wsgemu.service \
     "$DOC/LICENSE" "$DOC/copyright" "$DOC/README.md"
 for b in wsgemu wsgctl; do
     [ -x "$P/bin/$b" ] || fail "$P/bin/$b is not executable"
@@ -191,6 +191,7 @@ for m in wsgemu wsgctl; do
 done
 check "the installed config, its example, LICENSE, README are the sources"
 for pair in "etc/wsgemu/wsgemu.conf packaging/wsgemu.conf" \
+    "etc/logrotate.d/wsgemu packaging/wsgemu.logrotate" \
     "$DOC/examples/wsgemu.conf packaging/wsgemu.conf" \
     "$DOC/LICENSE LICENSE" "$DOC/copyright LICENSE" \
     "$DOC/README.md README.md"; do
@@ -342,11 +343,13 @@ while read -r d; do
 done <<EOF
 $(echo "$deps" | tr ',' '\n')
 EOF
-check "conffiles: /etc/wsgemu/wsgemu.conf"
+check "conffiles: /etc/wsgemu/wsgemu.conf, /etc/logrotate.d/wsgemu"
 dpkg-deb -I "$DEB" conffiles >"$S/conffiles" 2>&1 ||
     { show "$S/conffiles"; fail "the package has no conffiles"; }
-grep -qx /etc/wsgemu/wsgemu.conf "$S/conffiles" ||
-    { show "$S/conffiles"; fail "/etc/wsgemu/wsgemu.conf is no conffile"; }
+for f in /etc/wsgemu/wsgemu.conf /etc/logrotate.d/wsgemu; do
+    grep -qx "$f" "$S/conffiles" ||
+        { show "$S/conffiles"; fail "$f is no conffile"; }
+done
 
 check "the package's files"
 dpkg-deb -c "$DEB" | awk '{ print $NF }' | sed 's|^\./|/|' >"$S/files"
@@ -354,6 +357,7 @@ missing=""
 for f in /usr/bin/wsgemu /usr/bin/wsgctl \
     /usr/share/man/man1/wsgemu.1.gz /usr/share/man/man1/wsgctl.1.gz \
     /etc/wsgemu/wsgemu.conf /usr/share/doc/wsgemu/examples/wsgemu.conf \
+    /etc/logrotate.d/wsgemu \
     /usr/lib/systemd/system/wsgemu.service /usr/share/doc/wsgemu/copyright \
     /usr/share/doc/wsgemu/LICENSE /usr/share/doc/wsgemu/README.md; do
     grep -qxF "$f" "$S/files" || missing="$missing $f"
