@@ -72,7 +72,8 @@ static int parse_endpoint(const char *arg, struct wsg_endpoint *ep)
 }
 
 /* [ADDR:]PORT[:REMOTE]: an IPv4 ADDR has dots, so "1500:1501" is a port
- * pair and "127.0.0.1:1500" an address and a port. */
+ * pair and "127.0.0.1:1500" an address and a port. REMOTE "source" is
+ * remote port 0: answers to each datagram's source port. */
 static int parse_udp(const char *arg, struct wsg_endpoint *ep,
                      uint16_t *remote)
 {
@@ -92,7 +93,9 @@ static int parse_udp(const char *arg, struct wsg_endpoint *ep,
                         !memchr(arg, '.', (size_t)(first_colon - arg)))) {
         last = strrchr(buf, ':');
         *last++ = '\0';
-        if (parse_uint(last, 65535, &v) < 0 || v == 0)
+        if (strcmp(last, "source") == 0)
+            v = 0;
+        else if (parse_uint(last, 65535, &v) < 0 || v == 0)
             return -EINVAL;
         *remote = (uint16_t)v;
     }
@@ -241,7 +244,7 @@ static int set_udp(struct wsg_options *o, const struct wsg_setting *s,
         return 0;
     snprintf(err, errcap,
              "'%s' is not [ADDR:]PORT[:REMOTE] with an IPv4 ADDR, a "
-             "PORT of 0..65535 and a REMOTE port of 1..65535",
+             "PORT of 0..65535 and a REMOTE port of 1..65535 or 'source'",
              val);
     return -EINVAL;
 }
@@ -394,7 +397,9 @@ static const struct wsg_setting settings[] = {
      .arg = "[ADDR:]PORT[:REMOTE]",
      .help = "receive datagrams on PORT, answer\n"
              "to the sender's address at port\n"
-             "REMOTE (default {default})"},
+             "REMOTE (default {default});\n"
+             "REMOTE 'source': at the port it\n"
+             "sent from (not what a gripper does)"},
     {.name = "pty",
      .type = WSG_SETTING_TEXT,
      .at = WSG_AT(pty_path),
@@ -906,7 +911,8 @@ static unsigned udp_stride(const struct wsg_options *o)
 {
     long d = (long)o->udp_remote_port - (long)o->udp.port;
 
-    if (o->grippers <= 1 || o->udp.port == 0 || labs(d) >= (long)o->grippers)
+    if (o->grippers <= 1 || o->udp.port == 0 || o->udp_remote_port == 0 ||
+        labs(d) >= (long)o->grippers)
         return 1;
     return (d % 2 != 0) ? 2 : 0;
 }
@@ -964,7 +970,8 @@ void wsg_options_gripper(const struct wsg_options *o, unsigned i,
         out->tcp.port = (uint16_t)(out->tcp.port + i);
     if (out->udp.port != 0)
         out->udp.port = (uint16_t)(out->udp.port + i * stride);
-    out->udp_remote_port = (uint16_t)(out->udp_remote_port + i * stride);
+    if (out->udp_remote_port != 0) /* 0: source, for each of them */
+        out->udp_remote_port = (uint16_t)(out->udp_remote_port + i * stride);
     out->can_id = (uint16_t)(out->can_id + 2u * i);
     out->serial = o->serial + i;
     if (o->pty_path) {

@@ -50,7 +50,8 @@ struct wsg_tcp_config {
 
 struct wsg_udp_config {
     struct wsg_endpoint ep; /* where it listens */
-    uint16_t remote_port;   /* where answers go, at the sender's IP */
+    uint16_t remote_port;   /* where answers go, at the sender's IP; 0:
+                               to the port it last sent from (source) */
     int check_crc;
 };
 
