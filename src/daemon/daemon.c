@@ -198,7 +198,9 @@ static int open_gripper(struct wsg_daemon *d, struct wsg_gripper *g,
             return r;
     }
     if (o.pty_path) {
-        struct wsg_pty_config c = {o.pty_path, o.check_crc};
+        struct wsg_pty_config c = {o.pty_path, o.check_crc,
+                                   o.pty_mode_given ? (int)o.pty_mode : -1,
+                                   o.pty_group_given ? (long)o.pty_group : -1};
 
         r = open_transport(g, &wsg_pty_ops, &env, &c);
         if (r < 0)

@@ -22,6 +22,7 @@
 #include <ctype.h>
 #include <errno.h>
 #include <getopt.h>
+#include <grp.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -269,6 +270,54 @@ static int set_can(struct wsg_options *o, const struct wsg_setting *s,
     return -EINVAL;
 }
 
+/* Permission bits in octal ("0660", "660"), nothing beyond 0777: the
+ * set-ID and sticky bits mean nothing on a terminal. */
+static int set_pty_mode(struct wsg_options *o, const struct wsg_setting *s,
+                        const char *val, unsigned line, char *err,
+                        size_t errcap)
+{
+    unsigned long v = 0;
+    const char *p = val;
+
+    (void)line;
+    for (; *p >= '0' && *p <= '7' && v <= 0777; p++)
+        v = v * 8 + (unsigned long)(*p - '0');
+    if (p == val || *p || v > 0777) {
+        snprintf(err, errcap,
+                 "'%s' is not a mode in octal of 0..0777 (e.g. 0660)", val);
+        return -EINVAL;
+    }
+    *(uint32_t *)field(o, s->at) = (uint32_t)v;
+    return 0;
+}
+
+/* A group name, or a GID in decimal, looked up now: a group the system
+ * does not know is a mistake in the setup, reported before anything
+ * opens. */
+static int set_pty_group(struct wsg_options *o, const struct wsg_setting *s,
+                         const char *val, unsigned line, char *err,
+                         size_t errcap)
+{
+    struct group gr, *found = NULL;
+    char buf[4096];
+    unsigned long v;
+    int r;
+
+    (void)line;
+    if (parse_uint(val, 0xFFFFFFFEul, &v) == 0) {
+        *(uint32_t *)field(o, s->at) = (uint32_t)v;
+        return 0;
+    }
+    r = getgrnam_r(val, &gr, buf, sizeof buf, &found);
+    if (r == 0 && found) {
+        *(uint32_t *)field(o, s->at) = (uint32_t)found->gr_gid;
+        return 0;
+    }
+    snprintf(err, errcap,
+             "'%s' is not a group of this system (a name or a GID)", val);
+    return -EINVAL;
+}
+
 static int set_homing(struct wsg_options *o, const struct wsg_setting *s,
                       const char *val, unsigned line, char *err, size_t errcap)
 {
@@ -407,6 +456,25 @@ static const struct wsg_setting settings[] = {
      .arg = "PATH",
      .help = "serial port: a pseudo-terminal\n"
              "whose slave PATH links to"},
+    {.name = "pty-mode",
+     .type = WSG_SETTING_PARSE,
+     .parse = set_pty_mode,
+     .at = WSG_AT(pty_mode),
+     .given = WSG_AT(pty_mode_given),
+     .section = WSG_SECTION_INTERFACES,
+     .arg = "MODE",
+     .help = "permissions of the pty's slave, in\n"
+             "octal (0660: its group may open it;\n"
+             "default: as the system makes it)"},
+    {.name = "pty-group",
+     .type = WSG_SETTING_PARSE,
+     .parse = set_pty_group,
+     .at = WSG_AT(pty_group),
+     .given = WSG_AT(pty_group_given),
+     .section = WSG_SECTION_INTERFACES,
+     .arg = "NAME|GID",
+     .help = "group of the pty's slave (dialout);\n"
+             "the user must be in it, or root"},
     {.name = "can",
      .type = WSG_SETTING_PARSE,
      .parse = set_can,

@@ -58,6 +58,8 @@ struct wsg_udp_config {
 struct wsg_pty_config {
     const char *path; /* the link to the slave side */
     int check_crc;
+    int mode; /* permission bits for the slave; -1: as the system made it */
+    long gid; /* the slave's group; -1: as the system made it */
 };
 
 struct wsg_can_config {

@@ -246,7 +246,8 @@ stop_emu conf
 
 # Every setting the example shows, uncommented (lines "#key = value"),
 # but the CAN interface; the file system's and the network's are
-# overridden on the command line. The values must show in the gripper.
+# overridden on the command line, and so is the pty's group (dialout
+# needs root or a user in it). The values must show in the gripper.
 check "the example config with every setting uncommented (but can) starts"
 # The example startup script is where the package puts it, here under P.
 sed -e 's/^#\([a-z-]* = \)/\1/' -e '/^can = /d' \
@@ -257,7 +258,7 @@ n=$(grep -c '^[a-z-]* = ' "$S/all.conf") || true
 echo "    $n settings"
 start_emu all "$P/bin/wsgemu" --config "$S/all.conf" \
     --tcp 127.0.0.1:0 --udp 127.0.0.1:0:1501 --pty "$S/tty" \
-    --control 127.0.0.1:0 --web 127.0.0.1:0 --log "$S/comm.log"
+    --pty-group "$(id -g)" --control 127.0.0.1:0 --web 127.0.0.1:0 --log "$S/comm.log"
 echo "    $READY"
 case $READY in
 *" pty=$S/tty"*" control=127.0.0.1:"*" web=127.0.0.1:"*) ;;
