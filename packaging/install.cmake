@@ -17,6 +17,8 @@
 #   UNITDIR/wsgemu@.service         the template (an emulator per config
 #                                   file, SYSCONFDIR/wsgemu/NAME.conf),
 #                                   its ExecStart written likewise
+#   SYSCONFDIR/logrotate.d/wsgemu   packaging/wsgemu.logrotate; an existing
+#                                   file is kept, like the config file
 # Absolute paths come from GNUInstallDirs' own rule, applied to the prefix
 # of this install: /etc for the prefixes / and /usr, /etc/opt/X for /opt/X,
 # else PREFIX/etc; other directories below the prefix unless absolute.
@@ -39,6 +41,14 @@ if(EXISTS "$ENV{DESTDIR}${wsg_confdir}/wsgemu.conf")
 else()
   file(INSTALL DESTINATION "${wsg_confdir}" TYPE FILE
        FILES "${WSG_PKG_SRC}/wsgemu.conf")
+endif()
+
+# The logrotate snippet, kept like the config file.
+if(EXISTS "$ENV{DESTDIR}${wsg_etc}/logrotate.d/wsgemu")
+  message(STATUS "Keeping: $ENV{DESTDIR}${wsg_etc}/logrotate.d/wsgemu")
+else()
+  file(INSTALL DESTINATION "${wsg_etc}/logrotate.d" TYPE FILE
+       FILES "${WSG_PKG_SRC}/wsgemu.logrotate" RENAME wsgemu)
 endif()
 
 # The units: the sources name the Debian paths; write this install's.

@@ -78,6 +78,16 @@ struct wsg_grasp_stats {
 typedef void (*wsg_axis_done_fn)(void *ctx, uint32_t tag, uint8_t cmd_id,
                                  uint16_t status);
 
+/* What the model did on its own that its owner may want to tell (the
+ * communication log): a FAST STOP it entered without a request, and why.
+ * A requested FAST STOP (23h, a disconnect) is not reported: whoever
+ * requested it knows its cause. */
+enum wsg_axis_event {
+    WSG_AXIS_FAST_STOP_FAULT,     /* a power or current fault appeared */
+    WSG_AXIS_FAST_STOP_SOFT_LIMIT /* the fingers reached a soft limit */
+};
+typedef void (*wsg_axis_event_fn)(void *ctx, enum wsg_axis_event ev);
+
 /* The model's state. Its layout is private to src/axis (axis_impl.h):
  * everyone else reads it through the getters below and changes it through
  * the requests and setters, so the model alone keeps its invariants. */
@@ -89,7 +99,7 @@ struct wsg_axis;
  * that this is aligned for it; the words' types are those the struct
  * holds. Only the model reads or writes it, through a struct wsg_axis *
  * to it. */
-#define WSG_AXIS_STORAGE_WORDS 100
+#define WSG_AXIS_STORAGE_WORDS 102
 struct wsg_axis_storage {
     union {
         double d;
@@ -142,6 +152,10 @@ int wsg_axis_configure(struct wsg_axis *ax, enum wsg_axis_setting s, double v,
 
 void wsg_axis_init(struct wsg_axis *ax, const struct wsg_axis_config *cfg,
                    wsg_axis_done_fn on_done, void *ctx);
+/* Have fn told of the model's own events (NULL: no one); a power cycle
+ * keeps it. Called from within a step or settle: it must not call back
+ * into the model. */
+void wsg_axis_on_event(struct wsg_axis *ax, wsg_axis_event_fn fn, void *ctx);
 /* Power cycle: session settings back to defaults, not referenced. */
 void wsg_axis_reset(struct wsg_axis *ax);
 

@@ -98,6 +98,10 @@ struct wsg_device {
     /* A text session's line received (without its newline). */
     void (*trace_line)(void *ctx, const struct wsg_session *s,
                        const char *line, size_t len);
+    /* An event of the session (who: its peer), of the model ("gripper")
+     * or of whoever changed the world ("control"), as text: "connected",
+     * "closed without 07h", "fast-stop cause=23h", "ack". */
+    void (*trace_event)(void *ctx, const char *who, const char *text);
     void *trace_ctx;
     /* Resolve a session tag for a final result; NULL when it is gone. */
     struct wsg_session *(*lookup)(void *ctx, uint32_t tag);
@@ -144,11 +148,17 @@ wsg_device_axis_const(const struct wsg_device *d)
 
 void wsg_session_init(struct wsg_session *s, uint32_t tag, unsigned flags,
                       wsg_send_fn send, void *ctx);
+/* A connection was accepted (s->peer set), for the communication log. */
+void wsg_device_session_opened(struct wsg_device *d,
+                               const struct wsg_session *s);
 /* The peer went away (TCP close): FAST STOP at once unless it announced
  * it. The transport must no longer resolve s's tag (its lookup returns
  * NULL), since a motion s owned ends here. */
 void wsg_device_session_closed(struct wsg_device *d, struct wsg_session *s);
 
+/* An event for the communication log (trace_event); who NULL: the
+ * gripper itself. */
+void wsg_device_event(struct wsg_device *d, const char *who, const char *text);
 /* A text session's line received, for the communication log. */
 void wsg_device_trace_line(struct wsg_device *d, const struct wsg_session *s,
                            const char *line, size_t len);

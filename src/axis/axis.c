@@ -294,6 +294,18 @@ void wsg_axis_init(struct wsg_axis *ax, const struct wsg_axis_config *cfg,
     wsg_axis_reset(ax);
 }
 
+void wsg_axis_on_event(struct wsg_axis *ax, wsg_axis_event_fn fn, void *ctx)
+{
+    ax->on_event = fn;
+    ax->event_ctx = ctx;
+}
+
+static void wsg_axis_event(struct wsg_axis *ax, enum wsg_axis_event ev)
+{
+    if (ax->on_event)
+        ax->on_event(ax->event_ctx, ev);
+}
+
 void wsg_axis_reset(struct wsg_axis *ax)
 {
     /* A power cycle ends what runs, and whoever waits for it hears so. */
@@ -653,6 +665,7 @@ static void wsg_axis_soft_limit_stop(struct wsg_axis *ax)
 {
     ax->fast_stop = 1;
     ax->grasp_state = WSG_GS_ERROR;
+    wsg_axis_event(ax, WSG_AXIS_FAST_STOP_SOFT_LIMIT);
     wsg_axis_abort(ax, WSG_E_RANGE_ERROR);
 }
 
@@ -930,6 +943,7 @@ static void wsg_axis_apply_faults(struct wsg_axis *ax)
 
     ax->faults_seen = all;
     if (fresh & (WSG_SF_POWER_FAULT | WSG_SF_CURR_FAULT)) {
+        wsg_axis_event(ax, WSG_AXIS_FAST_STOP_FAULT);
         wsg_axis_fast_stop(ax);
     } else if (fresh & WSG_SF_TEMP_FAULT) {
         ax->grasp_state = WSG_GS_ERROR;

@@ -47,6 +47,8 @@ struct wsg_axis {
     struct wsg_axis_config cfg;
     wsg_axis_done_fn on_done;
     void *done_ctx;
+    wsg_axis_event_fn on_event; /* NULL: no one listens */
+    void *event_ctx;
 
     /* Physical state, changed only by wsg_axis_step. */
     uint64_t time_us;

@@ -77,9 +77,9 @@ static uint16_t wsg_cmd_fast_stop(struct wsg_device *d, struct wsg_session *s,
                                   const struct wsg_frame *f,
                                   struct wsg_reply *r)
 {
-    (void)s;
     (void)f;
     (void)r;
+    wsg_device_event(d, s->peer[0] ? s->peer : "?", "fast-stop cause=23h");
     wsg_axis_request_fast_stop(wsg_device_axis(d));
     return WSG_E_SUCCESS;
 }
@@ -87,11 +87,15 @@ static uint16_t wsg_cmd_fast_stop(struct wsg_device *d, struct wsg_session *s,
 static uint16_t wsg_cmd_ack(struct wsg_device *d, struct wsg_session *s,
                             const struct wsg_frame *f, struct wsg_reply *r)
 {
-    (void)s;
     (void)r;
     if (memcmp(f->payload, "ack", 3) != 0)
         return WSG_E_CMD_FORMAT_ERROR; /* 3.2.5: wrong key */
-    /* Nothing to acknowledge is still a success: drivers send it blindly. */
+    /* Nothing to acknowledge is still a success: drivers send it blindly;
+     * the log tells the two apart. */
+    wsg_device_event(d, s->peer[0] ? s->peer : "?",
+                     wsg_axis_fast_stopped(wsg_device_axis(d))
+                         ? "ack fast-stop cleared"
+                         : "ack nothing to clear");
     wsg_axis_request_ack(wsg_device_axis(d));
     return WSG_E_SUCCESS;
 }

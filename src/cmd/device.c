@@ -47,10 +47,20 @@ static void wsg_device_done(void *ctx, uint32_t tag, uint8_t cmd_id,
         d->cmd_failure = status != WSG_E_SUCCESS;
 }
 
+/* A FAST STOP the model entered by itself: its cause for the log. */
+static void wsg_device_axis_event(void *ctx, enum wsg_axis_event ev)
+{
+    wsg_device_event(ctx, NULL,
+                     ev == WSG_AXIS_FAST_STOP_FAULT
+                         ? "fast-stop cause=fault"
+                         : "fast-stop cause=soft-limit");
+}
+
 void wsg_device_init(struct wsg_device *d, const struct wsg_axis_config *cfg)
 {
     memset(d, 0, sizeof *d);
     wsg_axis_init(wsg_device_axis(d), cfg, wsg_device_done, d);
+    wsg_axis_on_event(wsg_device_axis(d), wsg_device_axis_event, d);
     d->info.type = cfg->type;
     d->info.hwrev = 1;
     d->info.swrev = 0x2200; /* firmware 2.2.0 */
@@ -101,11 +111,32 @@ static void wsg_session_end_streams(struct wsg_device *d,
     wsg_device_streams_changed(d, s);
 }
 
+void wsg_device_event(struct wsg_device *d, const char *who, const char *text)
+{
+    if (d->trace_event)
+        d->trace_event(d->trace_ctx, who ? who : "gripper", text);
+}
+
+static const char *wsg_session_who(const struct wsg_session *s)
+{
+    return s->peer[0] ? s->peer : "?";
+}
+
+void wsg_device_session_opened(struct wsg_device *d,
+                               const struct wsg_session *s)
+{
+    wsg_device_event(d, wsg_session_who(s), "connected");
+}
+
 void wsg_device_session_closed(struct wsg_device *d, struct wsg_session *s)
 {
     wsg_session_end_streams(d, s);
+    if (s->flags & WSG_SESSION_CONNECTION)
+        wsg_device_event(d, wsg_session_who(s),
+                         s->announced ? "closed (07h)" : "closed without 07h");
     if ((s->flags & WSG_SESSION_CONNECTION) && !s->announced &&
         d->disconnect_fast_stop) {
+        wsg_device_event(d, wsg_session_who(s), "fast-stop cause=disconnect");
         /* At once, as for a 23h: the motion is aborted now (its owner
          * told if still there; s itself no longer resolves), and the next
          * answer, to anyone, shows FAST STOP. */

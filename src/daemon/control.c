@@ -93,6 +93,24 @@ static void reply(struct ctl_ctx *c, const char *fmt, ...)
     c->s->answer(c->s->ctx, buf, (size_t)n);
 }
 
+/* A command that changed the world answers "ok WHAT" and puts WHAT in the
+ * communication log ("control event part 40 200"), before the settle
+ * that follows shows its consequences there (a FAST STOP by a fault). */
+static void changed(struct ctl_ctx *c, const char *fmt, ...)
+    __attribute__((format(printf, 2, 3)));
+
+static void changed(struct ctl_ctx *c, const char *fmt, ...)
+{
+    char what[WSG_CTL_REPLY_MAX - 4];
+    va_list ap;
+
+    va_start(ap, fmt);
+    vsnprintf(what, sizeof what, fmt, ap);
+    va_end(ap);
+    wsg_log_event(&c->ctl->cur->tap, "control", what);
+    reply(c, "ok %s", what);
+}
+
 /* ---- arguments ---- */
 
 /* A whole finite number, nothing after it. */
@@ -116,7 +134,7 @@ static void cmd_part(struct ctl_ctx *c, int argc, char **argv)
 
     if (argc == 2 && strcmp(argv[1], "none") == 0) {
         wsg_axis_set_part(ax, -1.0, 0.0);
-        reply(c, "ok part none");
+        changed(c, "part none");
         return;
     }
     if (argc < 2 || argc > 3) {
@@ -135,7 +153,7 @@ static void cmd_part(struct ctl_ctx *c, int argc, char **argv)
     wsg_axis_set_part(ax, width, stiffness);
     /* The stiffness as taken: the model's default for none given. */
     wsg_axis_part(ax, &width, &stiffness);
-    reply(c, "ok part %g %g", width, stiffness);
+    changed(c, "part %g %g", width, stiffness);
 }
 
 static void cmd_obstacle(struct ctl_ctx *c, int argc, char **argv)
@@ -151,7 +169,7 @@ static void cmd_obstacle(struct ctl_ctx *c, int argc, char **argv)
     }
     if (strcmp(argv[1], "none") == 0) {
         wsg_axis_set_obstacle(ax, -1.0);
-        reply(c, "ok obstacle none");
+        changed(c, "obstacle none");
         return;
     }
     if (!parse_num(argv[1], &width) || width < r.min || width > r.max) {
@@ -160,7 +178,7 @@ static void cmd_obstacle(struct ctl_ctx *c, int argc, char **argv)
         return;
     }
     wsg_axis_set_obstacle(ax, width);
-    reply(c, "ok obstacle %g", width);
+    changed(c, "obstacle %g", width);
 }
 
 static const struct {
@@ -194,7 +212,7 @@ static void cmd_fault(struct ctl_ctx *c, int argc, char **argv)
         if (strcmp(argv[1], faults[i].name) == 0) {
             wsg_axis_set_fault(wsg_device_axis(&c->ctl->cur->dev),
                                faults[i].flag, on);
-            reply(c, "ok fault %s %s", faults[i].name, on ? "on" : "off");
+            changed(c, "fault %s %s", faults[i].name, on ? "on" : "off");
             return;
         }
     }
@@ -339,7 +357,7 @@ static void cmd_reset(struct ctl_ctx *c, int argc, char **argv)
     (void)argv;
     /* Streams end with the power cycle (wsg_device_reset). */
     wsg_device_reset(&c->ctl->cur->dev);
-    reply(c, "ok reset");
+    changed(c, "reset");
 }
 
 static void cmd_gripper(struct ctl_ctx *c, int argc, char **argv)

@@ -71,9 +71,19 @@ static void on_signal(struct wsg_watch *w, uint32_t events)
     struct signalfd_siginfo si;
 
     (void)events;
-    while (read(w->fd, &si, sizeof si) == (ssize_t)sizeof si)
+    while (read(w->fd, &si, sizeof si) == (ssize_t)sizeof si) {
         if (si.ssi_signo == SIGINT || si.ssi_signo == SIGTERM)
             wsg_reactor_stop(&d->reactor);
+        else if (si.ssi_signo == SIGHUP && d->opt.log_path) {
+            /* logrotate renamed the file: lines go to a new one at the
+             * path. */
+            char err[512];
+
+            if (wsg_log_reopen(&d->log, d->opt.log_path, err, sizeof err))
+                fprintf(stderr, "wsgemu: %s; logging on to the old file\n",
+                        err);
+        }
+    }
 }
 
 static int open_transport(struct wsg_gripper *g,
@@ -189,7 +199,9 @@ static int open_gripper(struct wsg_daemon *d, struct wsg_gripper *g,
             return r;
     }
     if (o.pty_path) {
-        struct wsg_pty_config c = {o.pty_path, o.check_crc};
+        struct wsg_pty_config c = {o.pty_path, o.check_crc,
+                                   o.pty_mode_given ? (int)o.pty_mode : -1,
+                                   o.pty_group_given ? (long)o.pty_group : -1};
 
         r = open_transport(g, &wsg_pty_ops, &env, &c);
         if (r < 0)
@@ -245,6 +257,7 @@ static int open_signals(struct wsg_daemon *d)
     sigemptyset(&mask);
     sigaddset(&mask, SIGINT);
     sigaddset(&mask, SIGTERM);
+    sigaddset(&mask, SIGHUP); /* reopen the log */
     if (sigprocmask(SIG_BLOCK, &mask, NULL) < 0)
         return -errno;
     fd = signalfd(-1, &mask, SFD_NONBLOCK | SFD_CLOEXEC);

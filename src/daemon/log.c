@@ -305,30 +305,84 @@ static void log_out(void *ctx, const struct wsg_session *s, const uint8_t *pkt,
     emit(tap->log, &l);
 }
 
-int wsg_log_open(struct wsg_log *l, const char *path, char *err, size_t errcap)
+/* "HH:MM:SS.mmm t=SIM WHO event TEXT". */
+static void event_line(struct wsg_log_tap *tap, const char *who,
+                       const char *text)
 {
+    struct line l;
+
+    l.n = 0;
+    head_time(tap, &l);
+    put_str(&l, who);
+    put(&l, " event ", 7);
+    put_str(&l, text);
+    emit(tap->log, &l);
+}
+
+static void log_event(void *ctx, const char *who, const char *text)
+{
+    struct wsg_log_tap *tap = ctx;
+
+    if (wanted(tap->log))
+        event_line(tap, who, text);
+}
+
+/* A file of the log: appended to when mode is "a". */
+static int open_file(struct wsg_log *l, const char *path, const char *mode,
+                     char *err, size_t errcap)
+{
+    FILE *f = fopen(path, mode);
+    char *buf;
     int r;
 
+    if (!f) {
+        r = -errno;
+        snprintf(err, errcap, "--log: cannot open '%s': %s", path,
+                 strerror(-r));
+        return r;
+    }
+    /* Fully buffered; the loop flushes after each batch of events. */
+    buf = malloc(WSG_LOG_BUFSIZE);
+    if (buf)
+        setvbuf(f, buf, _IOFBF, WSG_LOG_BUFSIZE);
+    l->f = f;
+    l->own = 1;
+    l->buf = buf;
+    return 0;
+}
+
+int wsg_log_open(struct wsg_log *l, const char *path, char *err, size_t errcap)
+{
     memset(l, 0, sizeof *l);
     if (strcmp(path, "-") == 0) {
         /* A terminal watcher wants each line as it happens; stderr is
          * unbuffered by default, line buffering keeps lines whole. */
         l->f = stderr;
         setvbuf(stderr, NULL, _IOLBF, 0);
-    } else {
-        l->f = fopen(path, "w");
-        if (!l->f) {
-            r = -errno;
-            snprintf(err, errcap, "--log: cannot open '%s': %s", path,
-                     strerror(errno));
-            return r;
-        }
-        l->own = 1;
-        /* Fully buffered; the loop flushes after each batch of events. */
-        l->buf = malloc(WSG_LOG_BUFSIZE);
-        if (l->buf)
-            setvbuf(l->f, l->buf, _IOFBF, WSG_LOG_BUFSIZE);
+        return 0;
     }
+    return open_file(l, path, "w", err, errcap);
+}
+
+int wsg_log_reopen(struct wsg_log *l, const char *path, char *err,
+                   size_t errcap)
+{
+    struct wsg_log fresh;
+    int r;
+
+    if (!l->own)
+        return 0; /* stderr, or closed: nothing was renamed away */
+    memset(&fresh, 0, sizeof fresh);
+    /* The new file first: if it cannot be opened, lines go on into the
+     * old one rather than nowhere. */
+    r = open_file(&fresh, path, "a", err, errcap);
+    if (r < 0)
+        return r;
+    fflush(l->f);
+    fclose(l->f);
+    free(l->buf);
+    l->f = fresh.f;
+    l->buf = fresh.buf;
     return 0;
 }
 
@@ -341,6 +395,7 @@ void wsg_log_attach(struct wsg_log *l, struct wsg_log_tap *tap,
     d->trace_in = log_in;
     d->trace_out = log_out;
     d->trace_line = log_line;
+    d->trace_event = log_event;
     d->trace_ctx = tap;
 }
 
@@ -351,6 +406,7 @@ void wsg_log_detach(struct wsg_log_tap *tap, struct wsg_device *d)
     d->trace_in = NULL;
     d->trace_out = NULL;
     d->trace_line = NULL;
+    d->trace_event = NULL;
     d->trace_ctx = NULL;
 }
 
@@ -375,6 +431,12 @@ void wsg_log_text(struct wsg_log_tap *tap, const char *who, const char *text,
         text += n;
         len -= n;
     }
+}
+
+void wsg_log_event(struct wsg_log_tap *tap, const char *who, const char *text)
+{
+    if (tap->log && wanted(tap->log))
+        event_line(tap, who, text);
 }
 
 void wsg_log_sink(struct wsg_log *l,

@@ -22,6 +22,20 @@
  * a script registered is the script's own: its payload shows as hex, with
  * no status. What a script prints shows as "HH:MM:SS.mmm t=SIM script
  * print TEXT", a line per line it printed.
+ *
+ * Events of a session, of the gripper and of the world show as
+ *   HH:MM:SS.mmm t=SIM WHO event TEXT
+ * WHO being the session's peer, "gripper" for what the model did by
+ * itself, "control" for the control channel. TEXT is one of:
+ *   connected                    a TCP connection accepted
+ *   closed (07h)                 it closed after a Disconnect Announcement
+ *   closed without 07h           it closed without one
+ *   fast-stop cause=CAUSE        FAST STOP entered; CAUSE disconnect, 23h,
+ *                                fault (power or current) or soft-limit
+ *   ack fast-stop cleared        24h acknowledged a FAST STOP
+ *   ack nothing to clear         24h with no FAST STOP to acknowledge
+ *   part W S | part none | obstacle W | obstacle none | fault NAME on|off
+ *   | reset                      a control command that changed the world
  */
 #ifndef WSG_DAEMON_LOG_H
 #define WSG_DAEMON_LOG_H
@@ -58,6 +72,11 @@ struct wsg_log_tap {
 /* Open path ("-": stderr). Returns 0, or -errno with the reason in err. */
 int wsg_log_open(struct wsg_log *l, const char *path, char *err,
                  size_t errcap);
+/* Open path again (after logrotate renamed it: SIGHUP), appending if it
+ * exists. The old file is closed only once the new one is open. stderr
+ * stays as it is. Returns 0, or -errno with the reason in err. */
+int wsg_log_reopen(struct wsg_log *l, const char *path, char *err,
+                   size_t errcap);
 /* Hook d's trace callbacks into the log through tap (which must live as
  * long as the hook). */
 void wsg_log_attach(struct wsg_log *l, struct wsg_log_tap *tap,
@@ -69,6 +88,9 @@ void wsg_log_detach(struct wsg_log_tap *tap, struct wsg_device *d);
  * attached. */
 void wsg_log_text(struct wsg_log_tap *tap, const char *who, const char *text,
                   size_t len);
+/* An event line (see above) from outside the device: the control
+ * channel's "control event part 40 200". Nothing when tap is not attached. */
+void wsg_log_event(struct wsg_log_tap *tap, const char *who, const char *text);
 /* Have every line also handed to fn (NULL: no more). */
 void wsg_log_sink(struct wsg_log *l,
                   void (*fn)(void *ctx, const char *line, size_t len),

@@ -22,6 +22,7 @@
 #include <ctype.h>
 #include <errno.h>
 #include <getopt.h>
+#include <grp.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -72,7 +73,8 @@ static int parse_endpoint(const char *arg, struct wsg_endpoint *ep)
 }
 
 /* [ADDR:]PORT[:REMOTE]: an IPv4 ADDR has dots, so "1500:1501" is a port
- * pair and "127.0.0.1:1500" an address and a port. */
+ * pair and "127.0.0.1:1500" an address and a port. REMOTE "source" is
+ * remote port 0: answers to each datagram's source port. */
 static int parse_udp(const char *arg, struct wsg_endpoint *ep,
                      uint16_t *remote)
 {
@@ -92,7 +94,9 @@ static int parse_udp(const char *arg, struct wsg_endpoint *ep,
                         !memchr(arg, '.', (size_t)(first_colon - arg)))) {
         last = strrchr(buf, ':');
         *last++ = '\0';
-        if (parse_uint(last, 65535, &v) < 0 || v == 0)
+        if (strcmp(last, "source") == 0)
+            v = 0;
+        else if (parse_uint(last, 65535, &v) < 0 || v == 0)
             return -EINVAL;
         *remote = (uint16_t)v;
     }
@@ -241,7 +245,7 @@ static int set_udp(struct wsg_options *o, const struct wsg_setting *s,
         return 0;
     snprintf(err, errcap,
              "'%s' is not [ADDR:]PORT[:REMOTE] with an IPv4 ADDR, a "
-             "PORT of 0..65535 and a REMOTE port of 1..65535",
+             "PORT of 0..65535 and a REMOTE port of 1..65535 or 'source'",
              val);
     return -EINVAL;
 }
@@ -263,6 +267,54 @@ static int set_can(struct wsg_options *o, const struct wsg_setting *s,
              "'%s' is not IFACE[:ID] with an interface name and an "
              "11-bit ID of %lu..0x%lX",
              shown, (unsigned long)s->min, (unsigned long)s->max);
+    return -EINVAL;
+}
+
+/* Permission bits in octal ("0660", "660"), nothing beyond 0777: the
+ * set-ID and sticky bits mean nothing on a terminal. */
+static int set_pty_mode(struct wsg_options *o, const struct wsg_setting *s,
+                        const char *val, unsigned line, char *err,
+                        size_t errcap)
+{
+    unsigned long v = 0;
+    const char *p = val;
+
+    (void)line;
+    for (; *p >= '0' && *p <= '7' && v <= 0777; p++)
+        v = v * 8 + (unsigned long)(*p - '0');
+    if (p == val || *p || v > 0777) {
+        snprintf(err, errcap,
+                 "'%s' is not a mode in octal of 0..0777 (e.g. 0660)", val);
+        return -EINVAL;
+    }
+    *(uint32_t *)field(o, s->at) = (uint32_t)v;
+    return 0;
+}
+
+/* A group name, or a GID in decimal, looked up now: a group the system
+ * does not know is a mistake in the setup, reported before anything
+ * opens. */
+static int set_pty_group(struct wsg_options *o, const struct wsg_setting *s,
+                         const char *val, unsigned line, char *err,
+                         size_t errcap)
+{
+    struct group gr, *found = NULL;
+    char buf[4096];
+    unsigned long v;
+    int r;
+
+    (void)line;
+    if (parse_uint(val, 0xFFFFFFFEul, &v) == 0) {
+        *(uint32_t *)field(o, s->at) = (uint32_t)v;
+        return 0;
+    }
+    r = getgrnam_r(val, &gr, buf, sizeof buf, &found);
+    if (r == 0 && found) {
+        *(uint32_t *)field(o, s->at) = (uint32_t)found->gr_gid;
+        return 0;
+    }
+    snprintf(err, errcap,
+             "'%s' is not a group of this system (a name or a GID)", val);
     return -EINVAL;
 }
 
@@ -394,7 +446,9 @@ static const struct wsg_setting settings[] = {
      .arg = "[ADDR:]PORT[:REMOTE]",
      .help = "receive datagrams on PORT, answer\n"
              "to the sender's address at port\n"
-             "REMOTE (default {default})"},
+             "REMOTE (default {default});\n"
+             "REMOTE 'source': at the port it\n"
+             "sent from (not what a gripper does)"},
     {.name = "pty",
      .type = WSG_SETTING_TEXT,
      .at = WSG_AT(pty_path),
@@ -402,6 +456,25 @@ static const struct wsg_setting settings[] = {
      .arg = "PATH",
      .help = "serial port: a pseudo-terminal\n"
              "whose slave PATH links to"},
+    {.name = "pty-mode",
+     .type = WSG_SETTING_PARSE,
+     .parse = set_pty_mode,
+     .at = WSG_AT(pty_mode),
+     .given = WSG_AT(pty_mode_given),
+     .section = WSG_SECTION_INTERFACES,
+     .arg = "MODE",
+     .help = "permissions of the pty's slave, in\n"
+             "octal (0660: its group may open it;\n"
+             "default: as the system makes it)"},
+    {.name = "pty-group",
+     .type = WSG_SETTING_PARSE,
+     .parse = set_pty_group,
+     .at = WSG_AT(pty_group),
+     .given = WSG_AT(pty_group_given),
+     .section = WSG_SECTION_INTERFACES,
+     .arg = "NAME|GID",
+     .help = "group of the pty's slave (dialout);\n"
+             "the user must be in it, or root"},
     {.name = "can",
      .type = WSG_SETTING_PARSE,
      .parse = set_can,
@@ -653,7 +726,8 @@ static const struct wsg_setting settings[] = {
      .section = WSG_SECTION_EMULATOR,
      .arg = "FILE",
      .help = "communication log: one line per\n"
-             "packet; '-' for stderr"},
+             "packet and per event; '-' for\n"
+             "stderr; SIGHUP opens FILE again"},
     {.name = "config",
      .type = WSG_SETTING_CONFIG,
      .at = WSG_AT(config_path),
@@ -905,7 +979,8 @@ static unsigned udp_stride(const struct wsg_options *o)
 {
     long d = (long)o->udp_remote_port - (long)o->udp.port;
 
-    if (o->grippers <= 1 || o->udp.port == 0 || labs(d) >= (long)o->grippers)
+    if (o->grippers <= 1 || o->udp.port == 0 || o->udp_remote_port == 0 ||
+        labs(d) >= (long)o->grippers)
         return 1;
     return (d % 2 != 0) ? 2 : 0;
 }
@@ -963,7 +1038,8 @@ void wsg_options_gripper(const struct wsg_options *o, unsigned i,
         out->tcp.port = (uint16_t)(out->tcp.port + i);
     if (out->udp.port != 0)
         out->udp.port = (uint16_t)(out->udp.port + i * stride);
-    out->udp_remote_port = (uint16_t)(out->udp_remote_port + i * stride);
+    if (out->udp_remote_port != 0) /* 0: source, for each of them */
+        out->udp_remote_port = (uint16_t)(out->udp_remote_port + i * stride);
     out->can_id = (uint16_t)(out->can_id + 2u * i);
     out->serial = o->serial + i;
     if (o->pty_path) {

@@ -61,6 +61,10 @@ struct wsg_options {
     struct wsg_endpoint udp;     /* where the emulator listens */
     uint16_t udp_remote_port;    /* where replies go, at the sender's IP */
     const char *pty_path;        /* NULL: no serial port */
+    int pty_mode_given;          /* --pty-mode: chmod the slave */
+    uint32_t pty_mode;           /* permission bits, 0..0777 */
+    int pty_group_given;         /* --pty-group: chown the slave's group */
+    uint32_t pty_group;          /* its GID, a name resolved when read */
     const char *can_iface;       /* NULL: no CAN */
     uint16_t can_id;             /* commands on can_id, answers on can_id+1 */
     int control_enabled;         /* --control given */

@@ -27,6 +27,12 @@
  * open but does not read costs whole packets beyond the bound (counted),
  * never a broken one.
  *
+ * The slave is made the service user's, mode 0620 or 0600 as the system's
+ * devpts says; --pty-mode and --pty-group change its mode and group, so
+ * that a user in that group (dialout) may open it. They are applied to the
+ * slave by its path, not through a descriptor: opening the slave here would
+ * count as the host opening the port.
+ *
  * Tag: transport base | 1, the only session.
  */
 #define _GNU_SOURCE
@@ -462,6 +468,13 @@ static int pty_open(struct wsg_transport *t,
         r = -r;
         goto fail;
     }
+    step = "chown";
+    if (cfg->gid >= 0 && chown(pty->slave, (uid_t)-1, (gid_t)cfg->gid) < 0)
+        goto fail_errno;
+    /* After the chown, which may clear bits the mode wants. */
+    step = "chmod";
+    if (cfg->mode >= 0 && chmod(pty->slave, (mode_t)cfg->mode) < 0)
+        goto fail_errno;
     step = "termios";
     r = make_raw(pty->master.fd);
     if (r < 0)

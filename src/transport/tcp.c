@@ -245,6 +245,7 @@ static void conn_accept(struct wsg_tcp *tcp, int fd,
                      conn_packet, c);
     /* For the communication log. */
     snprintf(c->session.peer, sizeof c->session.peer, "tcp %s", p->name);
+    wsg_device_session_opened(tcp->dev, &c->session);
     c->text = tcp->text;
     if (c->text)
         wsg_gcl_init(&c->gcl, tcp->dev, &c->session, &tcp->gcl);

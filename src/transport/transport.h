@@ -50,13 +50,16 @@ struct wsg_tcp_config {
 
 struct wsg_udp_config {
     struct wsg_endpoint ep; /* where it listens */
-    uint16_t remote_port;   /* where answers go, at the sender's IP */
+    uint16_t remote_port;   /* where answers go, at the sender's IP; 0:
+                               to the port it last sent from (source) */
     int check_crc;
 };
 
 struct wsg_pty_config {
     const char *path; /* the link to the slave side */
     int check_crc;
+    int mode; /* permission bits for the slave; -1: as the system made it */
+    long gid; /* the slave's group; -1: as the system made it */
 };
 
 struct wsg_can_config {

@@ -4,6 +4,13 @@
  * configured remote port (1501), not to the datagram's source port: drivers
  * send from an ephemeral port and receive on a socket bound to 1501.
  *
+ * Opt-in (remote port 0, "--udp ADDR:PORT:source"), and not what a real
+ * gripper does: answers go to the port the peer's datagram came from, so
+ * a client that sends and receives on one socket (socat, nc, a container
+ * behind NAT, whose reply port is not its own) hears them. The peer is
+ * still its IP address; its answers, final results and streams follow the
+ * source port of its last datagram.
+ *
  * One packet per datagram. Each datagram is parsed on its own: several
  * packets in one are each answered, and a packet cut off at the end of a
  * datagram is answered E_CMD_FORMAT_ERROR, never joined with the next.
@@ -40,7 +47,7 @@ struct wsg_udp_peer {
     struct wsg_udp *udp;
     int used;
     uint64_t heard;        /* the udp->clock of its last datagram */
-    struct sockaddr_in to; /* sender's IP, the remote port */
+    struct sockaddr_in to; /* sender's IP, the remote (or source) port */
     struct wsg_session session;
 };
 
@@ -52,7 +59,7 @@ struct wsg_udp {
     size_t rxlen;
     uint32_t tag_base;
     int check_crc;
-    uint16_t remote_port;
+    uint16_t remote_port; /* 0: answer to the source port */
     uint32_t next_gen;
     uint64_t clock;
     uint64_t send_drops; /* answers the socket would not take */
@@ -81,8 +88,11 @@ static struct wsg_udp_peer *udp_peer(struct wsg_udp *udp,
 
     for (i = 0; i < WSG_UDP_PEERS; i++) {
         p = &udp->peers[i];
-        if (p->used && p->to.sin_addr.s_addr == from->sin_addr.s_addr)
+        if (p->used && p->to.sin_addr.s_addr == from->sin_addr.s_addr) {
+            if (udp->remote_port == 0)
+                p->to.sin_port = from->sin_port; /* its last sender */
             return p;
+        }
         if (!oldest || !p->used || (oldest->used && p->heard < oldest->heard))
             oldest = p;
     }
@@ -95,7 +105,8 @@ static struct wsg_udp_peer *udp_peer(struct wsg_udp *udp,
     memset(&p->to, 0, sizeof p->to);
     p->to.sin_family = AF_INET;
     p->to.sin_addr = from->sin_addr;
-    p->to.sin_port = htons(udp->remote_port);
+    p->to.sin_port =
+        udp->remote_port ? htons(udp->remote_port) : from->sin_port;
     p->udp = udp;
     p->used = 1;
     wsg_session_init(&p->session,
@@ -154,8 +165,9 @@ static struct wsg_session *udp_lookup(struct wsg_transport *t, uint32_t tag)
 static int udp_describe(const struct wsg_transport *t, char *buf, size_t len)
 {
     const struct wsg_udp *udp = t->state;
-    int r =
-        snprintf(buf, len, "%s>%u", udp->local, (unsigned)udp->remote_port);
+    int r = udp->remote_port ? snprintf(buf, len, "%s>%u", udp->local,
+                                        (unsigned)udp->remote_port)
+                             : snprintf(buf, len, "%s>source", udp->local);
 
     return r < 0 || (size_t)r >= len ? -ENOSPC : 0;
 }

@@ -1117,7 +1117,7 @@ static void part_log(const char *exe)
     struct emu e;
     struct gcl c;
     size_t nout = 0;
-    int lines = 0;
+    int lines = 0, nevent = 0;
 
     snprintf(dir, sizeof dir, "%s/wsgemu-gcl-XXXXXX", tmp ? tmp : "/tmp");
     REQUIRE(mkdtemp(dir) != NULL);
@@ -1172,11 +1172,19 @@ static void part_log(const char *exe)
             }
             nout++;
         }
-        lines++;
+        out = strstr(p, " event ");
+        if (out && out < end)
+            nevent++;
+        else
+            lines++;
         p = end + 1;
     }
     CHECK_EQ(nout, sizeof sent / sizeof sent[0]);
-    CHECK_EQ(lines, 7 + 9); /* 7 lines in, 9 out, nothing else */
+    CHECK_EQ(lines, 7 + 9); /* 7 in, 9 out, besides the events */
+    /* The connection's events: opened, and closed after its 07h. */
+    CHECK_EQ(nevent, 2);
+    CHECK(strstr(text, " event connected\n") != NULL);
+    CHECK(strstr(text, " event closed (07h)\n") != NULL);
     unlink(path);
     rmdir(dir);
 }

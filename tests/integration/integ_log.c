@@ -11,15 +11,25 @@
  * (it flushes after each batch of events), and all of them after it
  * stopped. Without --log no file is written, and a log that cannot be
  * opened is an error at start.
+ *
+ * Events: connections opened and closed with and without 07h, a FAST STOP
+ * by each of its causes (disconnect, 23h, a fault, a soft limit), the
+ * acknowledges, and the control commands that changed the world each show
+ * as an "event" line. On SIGHUP the daemon opens the file again at its
+ * path: after a rename (logrotate), new lines go to a new file there.
  */
-/* mkdtemp, fdopen */
+/* mkdtemp, fdopen, kill */
 #define _POSIX_C_SOURCE 200809L
 
 #include "check.h"
 #include "emu.h"
+#include "emu_ctl.h"
 
+#include <signal.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 static const char *exe;
@@ -189,6 +199,175 @@ static void test_log(const char *dir)
     unlink(path);
 }
 
+/* Read path until it has a line with every one of parts, within bound. */
+static int wait_line(const char *path, const char *const *parts, char *text,
+                     size_t cap)
+{
+    char line[1024];
+    double deadline = emu_now_ms() + EMU_REPLY_MS;
+
+    for (;;) {
+        if (emu_slurp(path, text, cap) >= 0 &&
+            find_line(text, parts, line, sizeof line))
+            return 1;
+        if (emu_now_ms() >= deadline)
+            return 0;
+        emu_sleep_ms(10);
+    }
+}
+
+static void test_events(const char *dir)
+{
+    char path[512], text[65536];
+    const char *args[] = {"--tcp", "127.0.0.1:0", "--control", "127.0.0.1:0",
+                          "--log", path,          NULL};
+    struct emu e;
+    struct emu_client c;
+    struct ctl k;
+    uint8_t p[16], home = 0;
+    size_t n;
+
+    snprintf(path, sizeof path, "%s/events.log", dir);
+    REQUIRE(emu_start(&e, exe, args) == 0);
+    REQUIRE(ctl_open(&k, &e) == 0);
+
+    /* A connection that announces its close, one that does not. */
+    REQUIRE(emu_open(&c, &e, &emu_tcp) == 0);
+    CHECK_EQ(emu_request(&c, WSG_CMD_DISCONNECT, NULL, 0, NULL, EMU_REPLY_MS),
+             WSG_E_SUCCESS);
+    emu_close(&c);
+    {
+        const char *const w[] = {" event closed (07h)", NULL};
+        CHECK(wait_line(path, w, text, sizeof text));
+    }
+    REQUIRE(emu_open(&c, &e, &emu_tcp) == 0);
+    CHECK_EQ(emu_request(&c, WSG_CMD_LOOP, "x", 1, NULL, EMU_REPLY_MS),
+             WSG_E_SUCCESS);
+    emu_abort(&c);
+    {
+        const char *const w[] = {" event fast-stop cause=disconnect", NULL};
+        CHECK(wait_line(path, w, text, sizeof text));
+    }
+
+    REQUIRE(emu_open(&c, &e, &emu_tcp) == 0);
+    CHECK_EQ(
+        emu_request(&c, WSG_CMD_ACK_FAST_STOP, "ack", 3, NULL, EMU_REPLY_MS),
+        WSG_E_SUCCESS);
+    CHECK_EQ(
+        emu_request(&c, WSG_CMD_ACK_FAST_STOP, "ack", 3, NULL, EMU_REPLY_MS),
+        WSG_E_SUCCESS);
+    CHECK_EQ(emu_request(&c, WSG_CMD_FAST_STOP, NULL, 0, NULL, EMU_REPLY_MS),
+             WSG_E_SUCCESS);
+    CHECK_EQ(
+        emu_request(&c, WSG_CMD_ACK_FAST_STOP, "ack", 3, NULL, EMU_REPLY_MS),
+        WSG_E_SUCCESS);
+
+    /* A fault that stops: the control command, then its consequence. */
+    CMD_OK(&k, "fault power on");
+    CMD_OK(&k, "fault power off");
+    CHECK_EQ(
+        emu_request(&c, WSG_CMD_ACK_FAST_STOP, "ack", 3, NULL, EMU_REPLY_MS),
+        WSG_E_SUCCESS);
+    CMD_OK(&k, "part 40");
+    CMD_OK(&k, "part none");
+
+    /* A grasp with no part whose clamping travel runs past a soft limit:
+     * FAST STOP at the limit (as in test_axis). */
+    CHECK_EQ(emu_motion(&c, WSG_CMD_HOMING, &home, 1, EMU_HOMING_MS, NULL),
+             WSG_E_SUCCESS);
+    n = emu_move_payload(p, 0, 60.0f, 100.0f);
+    CHECK_EQ(emu_motion(&c, WSG_CMD_PREPOSITION, p, n, EMU_MOVE_MS, NULL),
+             WSG_E_SUCCESS);
+    wsg_put_f32(p, 20.0f);
+    wsg_put_f32(p + 4, 100.0f);
+    CHECK_EQ(
+        emu_request(&c, WSG_CMD_SET_SOFT_LIMITS, p, 8, NULL, EMU_REPLY_MS),
+        WSG_E_SUCCESS);
+    n = emu_grasp_payload(p, 25.0f, 100.0f);
+    CHECK_EQ(emu_motion(&c, WSG_CMD_GRASP, p, n, EMU_MOVE_MS, NULL),
+             WSG_E_RANGE_ERROR);
+    CMD_OK(&k, "reset");
+    emu_close(&c);
+    ctl_close(&k);
+    CHECK_EQ(emu_stop(&e), 0);
+    REQUIRE(emu_slurp(path, text, sizeof text) > 0);
+    printf("events:\n%s", text);
+    {
+        const char *const p1[] = {" tcp 127.0.0.1:", " event connected", NULL};
+        const char *const p2[] = {" tcp 127.0.0.1:", " event closed (07h)",
+                                  NULL};
+        const char *const p3[] = {
+            " tcp 127.0.0.1:", " event closed without 07h", NULL};
+        const char *const p4[] = {
+            " tcp 127.0.0.1:", " event fast-stop cause=disconnect", NULL};
+        const char *const p5[] = {" event ack fast-stop cleared", NULL};
+        const char *const p6[] = {" event ack nothing to clear", NULL};
+        const char *const p7[] = {
+            " tcp 127.0.0.1:", " event fast-stop cause=23h", NULL};
+        const char *const p8[] = {" control event fault power on", NULL};
+        const char *const p9[] = {" gripper event fast-stop cause=fault",
+                                  NULL};
+        const char *const p10[] = {" control event fault power off", NULL};
+        const char *const p11[] = {" control event part 40 ", NULL};
+        const char *const p12[] = {" control event part none", NULL};
+        const char *const p13[] = {" gripper event fast-stop cause=soft-limit",
+                                   NULL};
+        const char *const p14[] = {" control event reset", NULL};
+        const char *const *all[] = {p1, p2, p3,  p4,  p5,  p6,  p7,
+                                    p8, p9, p10, p11, p12, p13, p14};
+        char l1[1024], l2[1024];
+
+        for (size_t i = 0; i < sizeof all / sizeof all[0]; i++)
+            expect(text, all[i]);
+        /* The command first, then what it caused. */
+        if (find_line(text, p8, l1, sizeof l1) &&
+            find_line(text, p9, l2, sizeof l2))
+            CHECK(strstr(text, l1) < strstr(text, l2));
+    }
+    unlink(path);
+}
+
+/* logrotate renames the file and sends SIGHUP: the lines before it stay in
+ * the renamed file, those after it go to a new file at the path. */
+static void test_reopen(const char *dir)
+{
+    char path[512], old[600], text[65536];
+    const char *args[] = {"--tcp", "127.0.0.1:0", "--log", path, NULL};
+    const char *const one[] = {" in 06h Loop data=6F 6E 65", NULL};
+    const char *const two[] = {" in 06h Loop data=74 77 6F", NULL};
+    char line[1024];
+    struct emu e;
+    struct emu_client c;
+    struct stat st;
+    double deadline;
+
+    snprintf(path, sizeof path, "%s/rot.log", dir);
+    snprintf(old, sizeof old, "%s.1", path);
+    REQUIRE(emu_start(&e, exe, args) == 0);
+    REQUIRE(emu_open(&c, &e, &emu_tcp) == 0);
+    CHECK_EQ(emu_request(&c, WSG_CMD_LOOP, "one", 3, NULL, EMU_REPLY_MS),
+             WSG_E_SUCCESS);
+    CHECK(wait_line(path, one, text, sizeof text));
+    REQUIRE(rename(path, old) == 0);
+    REQUIRE(kill(e.pid, SIGHUP) == 0);
+    /* The new file appears when the signal was handled. */
+    deadline = emu_now_ms() + EMU_REPLY_MS;
+    while (stat(path, &st) != 0 && emu_now_ms() < deadline)
+        emu_sleep_ms(10);
+    CHECK_EQ(stat(path, &st), 0);
+    CHECK_EQ(emu_request(&c, WSG_CMD_LOOP, "two", 3, NULL, EMU_REPLY_MS),
+             WSG_E_SUCCESS);
+    CHECK(wait_line(path, two, text, sizeof text));
+    CHECK(find_line(text, one, line, sizeof line) == NULL);
+    emu_close(&c);
+    CHECK_EQ(emu_stop(&e), 0); /* SIGHUP did not end it */
+    REQUIRE(emu_slurp(old, text, sizeof text) > 0);
+    expect(text, one);
+    CHECK(find_line(text, two, line, sizeof line) == NULL);
+    unlink(path);
+    unlink(old);
+}
+
 static void test_bad_log(void)
 {
     static const char *const args[] = {"--tcp", "127.0.0.1:0", "--log",
@@ -212,6 +391,8 @@ int main(int argc, char **argv)
     snprintf(dir, sizeof dir, "%s/wsgemu-log-XXXXXX", tmp ? tmp : "/tmp");
     REQUIRE(mkdtemp(dir) != NULL);
     test_log(dir);
+    test_events(dir);
+    test_reopen(dir);
     test_bad_log();
     rmdir(dir);
     TEST_EXIT();

@@ -17,7 +17,10 @@
  *   the close;
  * - a driver that does not read costs whole packets beyond the output
  *   bound, never a broken one, and the port works on;
- * - SIGTERM exits 0 and removes the link.
+ * - SIGTERM exits 0 and removes the link;
+ * - --pty-mode sets the slave's permissions, --pty-group its group (as
+ *   root, to dialout where it exists); a bad mode or an unknown group is
+ *   refused with status 2 and a message.
  */
 #define _GNU_SOURCE /* cfmakeraw, cfsetspeed */
 
@@ -27,6 +30,7 @@
 
 #include <errno.h>
 #include <fcntl.h>
+#include <grp.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -507,6 +511,55 @@ static void test_path_taken(const char *exe)
     CHECK(strstr(err, args[1]) != NULL);
 }
 
+static void test_mode_group(const char *exe)
+{
+    const char *tmp = getenv("TMPDIR");
+    char path[256], out[512], err[512], gid[32];
+    const char *args[] = {"--pty", path, "--pty-mode", "0660",
+                          NULL,    NULL, NULL};
+    struct group *dialout = geteuid() == 0 ? getgrnam("dialout") : NULL;
+    struct stat st;
+    struct emu e;
+    int status;
+
+    snprintf(path, sizeof path, "%s/wsgemu-pty-mode-%ld", tmp ? tmp : "/tmp",
+             (long)getpid());
+    if (dialout) {
+        args[4] = "--pty-group";
+        args[5] = "dialout";
+    } else {
+        printf("not root or no group dialout: --pty-group not checked\n");
+    }
+    REQUIRE(emu_start(&e, exe, args) == 0);
+    CHECK_EQ(stat(path, &st), 0); /* the slave, through the link */
+    CHECK_EQ(st.st_mode & 07777, 0660);
+    if (dialout)
+        CHECK_EQ(st.st_gid, dialout->gr_gid);
+    CHECK_EQ(emu_stop(&e), 0);
+
+    /* Refused before anything opens: status 2, the value named. */
+    args[3] = "0999";
+    args[4] = NULL;
+    status =
+        emu_run(exe, args, emu_ms(5000), out, sizeof out, err, sizeof err);
+    printf("--pty-mode 0999: status %d, stderr \"%s\"\n", status, err);
+    CHECK_EQ(status, 2);
+    CHECK(strstr(err, "0999") != NULL);
+    args[2] = "--pty-group";
+    args[3] = "no-such-group-wsgemu";
+    status =
+        emu_run(exe, args, emu_ms(5000), out, sizeof out, err, sizeof err);
+    printf("--pty-group unknown: status %d, stderr \"%s\"\n", status, err);
+    CHECK_EQ(status, 2);
+    CHECK(strstr(err, "no-such-group-wsgemu") != NULL);
+    /* A GID in decimal is taken as it is. */
+    snprintf(gid, sizeof gid, "%ld", (long)getegid());
+    args[3] = gid;
+    REQUIRE(emu_start(&e, exe, args) == 0);
+    CHECK(stat(path, &st) == 0 && st.st_gid == getegid());
+    CHECK_EQ(emu_stop(&e), 0);
+}
+
 int main(int argc, char **argv)
 {
     const char *exe = emu_exe(argc, argv);
@@ -527,5 +580,6 @@ int main(int argc, char **argv)
 
     test_sigterm(exe);
     test_path_taken(exe);
+    test_mode_group(exe);
     TEST_EXIT();
 }

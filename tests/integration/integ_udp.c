@@ -8,14 +8,21 @@
  *   E_CMD_FORMAT_ERROR under its ID (or dropped when even the ID is
  *   missing) and never joined with the next datagram;
  * - the ready line reads udp=ADDR:PORT>REMOTE; the defaults are
- *   127.0.0.1:1500>1501 next to TCP when no interface is named.
+ *   127.0.0.1:1500>1501 next to TCP when no interface is named;
+ * - with REMOTE "source" (opt-in) answers go to the datagram's source
+ *   port: a socket that sends and receives on one port gets them, final
+ *   results and streams included, and when the same address sends from
+ *   another port, they follow it there. The ready line reads >source.
  */
 #define _GNU_SOURCE
 
 #include "check.h"
 #include "emu.h"
 
+#include <arpa/inet.h>
+#include <netinet/in.h>
 #include <poll.h>
+#include <stdlib.h>
 #include <string.h>
 #include <sys/socket.h>
 #include <unistd.h>
@@ -102,6 +109,97 @@ static void test_datagrams(struct emu *e)
     emu_close(&c);
 }
 
+/* A socket on an ephemeral port, connected to the daemon's: it sends and
+ * receives on the same port, as socat's UDP: and nc -u do. */
+static int source_socket(uint16_t port)
+{
+    struct sockaddr_in sa;
+    int fd = socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC, 0);
+
+    REQUIRE(fd >= 0);
+    memset(&sa, 0, sizeof sa);
+    sa.sin_family = AF_INET;
+    sa.sin_port = htons(port);
+    sa.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    REQUIRE(connect(fd, (struct sockaddr *)&sa, sizeof sa) == 0);
+    return fd;
+}
+
+/* One packet out, the next datagram in: its ID and status, -1 on none. */
+static int exchange(int fd, uint8_t id, const void *payload, size_t len,
+                    int timeout_ms, uint16_t *status)
+{
+    uint8_t pkt[64], buf[256];
+    struct pollfd pfd = {fd, POLLIN, 0};
+    size_t n = wsg_frame_encode(pkt, sizeof pkt, id, payload, len);
+    ssize_t r;
+
+    if (n && send(fd, pkt, n, 0) != (ssize_t)n)
+        return -1;
+    if (poll(&pfd, 1, timeout_ms) != 1)
+        return -1;
+    r = recv(fd, buf, sizeof buf, 0);
+    if (r < 8)
+        return -1;
+    *status = (uint16_t)(buf[6] | buf[7] << 8);
+    return buf[3];
+}
+
+static void test_source(const char *exe)
+{
+    static const char *const args[] = {"--udp", "127.0.0.1:0:source", NULL};
+    struct emu e;
+    char v[64], *gt;
+    uint16_t port, st = 0;
+    uint8_t home = 0, auto_width[3] = {0x01, 100, 0}; /* every 100 ms */
+    int a, b, id;
+
+    REQUIRE(emu_start(&e, exe, args) == 0);
+    REQUIRE(emu_field(&e, "udp", v, sizeof v));
+    gt = strchr(v, '>');
+    REQUIRE(gt != NULL);
+    CHECK(strcmp(gt, ">source") == 0);
+    *gt = '\0';
+    port = (uint16_t)atoi(strrchr(v, ':') + 1);
+
+    a = source_socket(port);
+    CHECK_EQ(exchange(a, WSG_CMD_LOOP, "src", 3, EMU_REPLY_MS, &st),
+             WSG_CMD_LOOP);
+    CHECK_EQ(st, WSG_E_SUCCESS);
+    /* A motion's final result comes to the same port. */
+    CHECK_EQ(exchange(a, WSG_CMD_HOMING, &home, 1, EMU_REPLY_MS, &st),
+             WSG_CMD_HOMING);
+    CHECK_EQ(st, WSG_E_CMD_PENDING);
+    {
+        struct pollfd pfd = {a, POLLIN, 0};
+        uint8_t buf[64];
+
+        CHECK_EQ(poll(&pfd, 1, EMU_HOMING_MS), 1);
+        CHECK(recv(a, buf, sizeof buf, 0) >= 8 && buf[3] == WSG_CMD_HOMING &&
+              buf[6] == 0 && buf[7] == 0);
+    }
+    /* The same address from another port: answers and its stream follow
+     * it there, none go to the old port any more. */
+    b = source_socket(port);
+    id = exchange(b, WSG_CMD_GET_WIDTH, auto_width, 3, EMU_REPLY_MS, &st);
+    CHECK_EQ(id, WSG_CMD_GET_WIDTH);
+    {
+        struct pollfd pfd = {b, POLLIN, 0};
+        uint8_t buf[64];
+
+        /* Two stream packets, at 100 ms each, within a generous bound. */
+        CHECK_EQ(poll(&pfd, 1, EMU_REPLY_MS), 1);
+        CHECK(recv(b, buf, sizeof buf, 0) >= 8 && buf[3] == WSG_CMD_GET_WIDTH);
+        CHECK_EQ(poll(&pfd, 1, EMU_REPLY_MS), 1);
+        CHECK(recv(b, buf, sizeof buf, 0) >= 8 && buf[3] == WSG_CMD_GET_WIDTH);
+        pfd.fd = a;
+        CHECK_EQ(poll(&pfd, 1, 0), 0);
+    }
+    close(a);
+    close(b);
+    CHECK_EQ(emu_stop(&e), 0);
+}
+
 static void test_defaults(const char *exe)
 {
     static const char *const none[] = {NULL};
@@ -134,6 +232,7 @@ int main(int argc, char **argv)
     test_reply_port(&e);
     test_datagrams(&e);
     CHECK_EQ(emu_stop(&e), 0);
+    test_source(exe);
     test_defaults(exe);
     TEST_EXIT();
 }

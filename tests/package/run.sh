@@ -177,6 +177,7 @@ DOC=share/doc/wsgemu
 check "every file is installed"
 has_files "$P" bin/wsgemu bin/wsgctl \
     etc/wsgemu/wsgemu.conf "$DOC/examples/wsgemu.conf" \
+    etc/logrotate.d/wsgemu \
     lib/systemd/system/wsgemu.service lib/systemd/system/wsgemu@.service \
     "$DOC/LICENSE" "$DOC/copyright" "$DOC/README.md" "$DOC/changelog.gz"
 for b in wsgemu wsgctl; do
@@ -196,6 +197,7 @@ for m in wsgemu wsgctl; do
 done
 check "the installed config, its example, LICENSE, README are the sources"
 for pair in "etc/wsgemu/wsgemu.conf packaging/wsgemu.conf" \
+    "etc/logrotate.d/wsgemu packaging/wsgemu.logrotate" \
     "$DOC/examples/wsgemu.conf packaging/wsgemu.conf" \
     "$DOC/LICENSE LICENSE" "$DOC/copyright LICENSE" \
     "$DOC/README.md README.md"; do
@@ -253,7 +255,8 @@ stop_emu conf
 
 # Every setting the example shows, uncommented (lines "#key = value"),
 # but the CAN interface; the file system's and the network's are
-# overridden on the command line. The values must show in the gripper.
+# overridden on the command line, and so is the pty's group (dialout
+# needs root or a user in it). The values must show in the gripper.
 check "the example config with every setting uncommented (but can) starts"
 # The example startup script is where the package puts it, here under P.
 sed -e 's/^#\([a-z-]* = \)/\1/' -e '/^can = /d' \
@@ -264,7 +267,7 @@ n=$(grep -c '^[a-z-]* = ' "$S/all.conf") || true
 echo "    $n settings"
 start_emu all "$P/bin/wsgemu" --config "$S/all.conf" \
     --tcp 127.0.0.1:0 --udp 127.0.0.1:0:1501 --pty "$S/tty" \
-    --control 127.0.0.1:0 --web 127.0.0.1:0 --log "$S/comm.log"
+    --pty-group "$(id -g)" --control 127.0.0.1:0 --web 127.0.0.1:0 --log "$S/comm.log"
 echo "    $READY"
 case $READY in
 *" pty=$S/tty"*" control=127.0.0.1:"*" web=127.0.0.1:"*) ;;
@@ -350,11 +353,13 @@ while read -r d; do
 done <<EOF
 $(echo "$deps" | tr ',' '\n')
 EOF
-check "conffiles: /etc/wsgemu/wsgemu.conf"
+check "conffiles: /etc/wsgemu/wsgemu.conf, /etc/logrotate.d/wsgemu"
 dpkg-deb -I "$DEB" conffiles >"$S/conffiles" 2>&1 ||
     { show "$S/conffiles"; fail "the package has no conffiles"; }
-grep -qx /etc/wsgemu/wsgemu.conf "$S/conffiles" ||
-    { show "$S/conffiles"; fail "/etc/wsgemu/wsgemu.conf is no conffile"; }
+for f in /etc/wsgemu/wsgemu.conf /etc/logrotate.d/wsgemu; do
+    grep -qx "$f" "$S/conffiles" ||
+        { show "$S/conffiles"; fail "$f is no conffile"; }
+done
 
 check "the changelog: Debian's format, this version, gzip -9n"
 dpkg-deb --fsys-tarfile "$DEB" |
@@ -398,6 +403,7 @@ missing=""
 for f in /usr/bin/wsgemu /usr/bin/wsgctl \
     /usr/share/man/man1/wsgemu.1.gz /usr/share/man/man1/wsgctl.1.gz \
     /etc/wsgemu/wsgemu.conf /usr/share/doc/wsgemu/examples/wsgemu.conf \
+    /etc/logrotate.d/wsgemu \
     /usr/lib/systemd/system/wsgemu.service \
     /usr/lib/systemd/system/wsgemu@.service /usr/share/doc/wsgemu/copyright \
     /usr/share/doc/wsgemu/LICENSE /usr/share/doc/wsgemu/README.md \
