@@ -48,6 +48,10 @@ if [ "$test_deps" = 1 ]; then
     # The Python client's tests (tests/python/run.sh): Debian's python3 makes a
     # venv that sees the system pytest, and pip installs python/ into it offline.
     pkgs="$pkgs python3 python3-venv python3-pytest"
+    # The Python package builds with setuptools and wheel, Debian's, so that
+    # `pip install --no-build-isolation ./python` needs no package index; the
+    # python_mypy test checks the package with Debian's mypy (--strict).
+    pkgs="$pkgs python3-setuptools python3-wheel python3-mypy"
     # The web page's browser tests (tests/browser/run.sh): Debian's Chromium,
     # headless, driven through WebDriver by chromium-driver and Debian's
     # python3-selenium.

@@ -231,3 +231,131 @@ def test_plugin_documents_its_options(pytester):
     result.stdout.fnmatch_lines(["*--wsgemu=PATH*", "*wsgemu_args*"])
     result = pytester.runpytest("--markers")
     result.stdout.fnmatch_lines(["*@pytest.mark.wsgemu_args(*args)*"])
+
+
+# ---- the log in a failing test's report, the session fixture, attach
+# mode, free UDP answer ports, and where the daemon is found ----
+
+def test_a_failing_tests_report_shows_the_daemons_log(pytester,
+                                                      wsgemu_binary):
+    pytester.makepyfile(test_user="""
+        def test_fails(wsgemu):
+            assert wsgemu.gripper.width() < 0
+
+        def test_passes(wsgemu):
+            wsgemu.gripper.width()
+    """)
+    result = _run(pytester, wsgemu_binary, "-rA")
+    result.assert_outcomes(failed=1, passed=1)
+    out = result.stdout.str()
+    # The failing test's report has the communication log with its
+    # request (43h) ...
+    result.stdout.fnmatch_lines([
+        "*- wsgemu: communication log -*",
+        "*tcp 127.0.0.1:* in 43h GetOpeningWidth",
+        "*tcp 127.0.0.1:* out 43h GetOpeningWidth E_SUCCESS width=55.000"])
+    # ... the passing one's none.
+    assert out.count("communication log") == 1
+
+
+def test_session_fixture_is_one_daemon_for_all_tests(pytester,
+                                                     wsgemu_binary,
+                                                     tmp_path):
+    pids = tmp_path / "pids"
+    pytester.makepyfile(test_user="""
+        def test_one(wsgemu_session):
+            open(%r, "a").write("%%d\\n" %% wsgemu_session.process.pid)
+            wsgemu_session.gripper.set_acceleration(250.0)
+
+        def test_two(wsgemu_session):
+            open(%r, "a").write("%%d\\n" %% wsgemu_session.process.pid)
+            # The state the first test left: the same daemon.
+            assert round(wsgemu_session.gripper.get_acceleration()) == 250
+    """ % (str(pids), str(pids)))
+    result = _run(pytester, wsgemu_binary)
+    result.assert_outcomes(passed=2)
+    [pid] = set(int(p) for p in pids.read_text().split())
+    with pytest.raises(ProcessLookupError):
+        os.kill(pid, 0)  # stopped at the session's end
+
+
+@pytest.mark.parametrize("how", ["option", "environment"])
+def test_attach_mode_uses_a_running_daemon(pytester, wsgemu_binary,
+                                           monkeypatch, how):
+    with Emulator(wsgemu_binary) as emu:
+        emu.gripper.home()
+        spec = "%s:%d,control=%s:%d" % (*emu.tcp_addr, *emu.control_addr)
+        pytester.makepyfile(test_user="""
+            import pytest
+
+            def test_attached(wsgemu):
+                assert wsgemu.process is None  # nothing started
+                assert wsgemu.tcp_addr == (%r, %d)
+                # control.reset() at the start: not homed any more.
+                assert not wsgemu.control.state()["flags"] & 1
+                assert wsgemu.gripper.loop(b"x") == b"x"
+
+            def test_session(wsgemu_session):
+                assert wsgemu_session.process is None
+
+            @pytest.mark.wsgemu_args("--model", "wsg32")
+            def test_needs_its_own(wsgemu):
+                pass
+        """ % emu.tcp_addr)
+        if how == "option":
+            result = pytester.runpytest("-p", "no:cacheprovider", "-rs",
+                                        "--wsgemu-attach=" + spec)
+        else:
+            monkeypatch.setenv("WSGEMU_ATTACH", spec)
+            result = pytester.runpytest("-p", "no:cacheprovider", "-rs")
+        result.assert_outcomes(passed=2, skipped=1)
+        result.stdout.fnmatch_lines(["*needs a daemon of its own "
+                                     "(wsgemu_args)*attached to*"])
+        assert emu.running  # left running: not the fixture's to stop
+        assert emu.gripper.loop(b"y") == b"y"
+
+
+def test_udp_marker_picks_free_answer_ports(pytester, wsgemu_binary):
+    pytester.makepyfile(test_user="""
+        import pytest
+        from wsgemu import Emulator
+
+        @pytest.mark.wsgemu_udp
+        def test_udp(wsgemu, wsgemu_binary):
+            [(host, port, answer)] = wsgemu.udp
+            assert answer != 1501 and port != 1500
+            assert wsgemu.new_udp_gripper().loop(b"u") == b"u"
+            # A second daemon at the same time answers to another port.
+            with Emulator(wsgemu_binary, udp=True) as other:
+                assert other.udp[0][2] != answer
+                assert other.new_udp_gripper().loop(b"v") == b"v"
+    """)
+    pytester.makeconftest("""
+        import pytest
+        from wsgemu import find_binary
+
+        @pytest.fixture
+        def wsgemu_binary(request):
+            return find_binary(request.config.getoption("wsgemu_binary"))
+    """)
+    result = _run(pytester, wsgemu_binary)
+    result.assert_outcomes(passed=1)
+
+
+def test_find_binary_order(monkeypatch, tmp_path, wsgemu_binary):
+    import wsgemu.daemon as daemon
+    bundled = tmp_path / "bin"
+    bundled.mkdir()
+    on_path = tmp_path / "path"
+    on_path.mkdir()
+    for d in (bundled, on_path):
+        os.symlink(wsgemu_binary, str(d / "wsgemu"))
+    monkeypatch.setattr(daemon, "BUNDLED_DIR", str(bundled))
+    monkeypatch.setenv("PATH", str(on_path))
+    monkeypatch.setenv("WSGEMU", wsgemu_binary)
+    assert daemon.find_binary("/bin/true") == "/bin/true"  # given: first
+    assert daemon.find_binary() == wsgemu_binary           # then $WSGEMU
+    monkeypatch.delenv("WSGEMU")
+    assert daemon.find_binary() == str(bundled / "wsgemu")  # then bundled
+    monkeypatch.setattr(daemon, "BUNDLED_DIR", str(tmp_path / "none"))
+    assert daemon.find_binary() == str(on_path / "wsgemu")  # then PATH

@@ -12,12 +12,15 @@ from .client import (Cmd, Control, ControlError, Frame, FrameParser,
                      GraspState, GraspStats, Gripper, Pending, Reply, Status,
                      SystemFlag, SystemInfo, SystemLimits, WsgError,
                      WsgTimeout, crc16, encode_frame, status_name)
-from .daemon import DaemonError, Emulator, find_binary, parse_ready_line
+from .daemon import (AttachedEmulator, DaemonError, Emulator, bundled_binary,
+                     find_binary, free_udp_port, parse_attach,
+                     parse_ready_line)
 
 __version__ = "0.1.0"
 
 __all__ = [
-    "Cmd", "Control", "ControlError", "DaemonError", "Emulator", "Frame",
+    "AttachedEmulator", "Cmd", "Control", "ControlError", "DaemonError",
+    "Emulator", "Frame", "bundled_binary", "free_udp_port", "parse_attach",
     "FrameParser", "GraspState", "GraspStats", "Gripper", "Pending", "Reply",
     "Status", "SystemFlag", "SystemInfo", "SystemLimits", "WsgError",
     "WsgTimeout", "crc16", "encode_frame", "find_binary", "parse_ready_line",

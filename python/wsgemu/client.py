@@ -21,7 +21,9 @@ import os
 import socket
 import struct
 import time
-from typing import Dict, List, NamedTuple, Optional, Tuple, Union
+from types import TracebackType
+from typing import (Any, Dict, List, Literal, NamedTuple, Optional, Tuple,
+                    Type, Union, overload)
 
 __all__ = [
     "Cmd",
@@ -326,7 +328,8 @@ def _reply(frame: Frame) -> Reply:
 
 
 def _f32(data: bytes, offset: int = 0) -> float:
-    return struct.unpack_from("<f", data, offset)[0]
+    value: float = struct.unpack_from("<f", data, offset)[0]
+    return value
 
 
 def _need(reply: Reply, n: int) -> bytes:
@@ -335,7 +338,8 @@ def _need(reply: Reply, n: int) -> bytes:
     return reply.params
 
 
-def _addr(addr: Union[str, Tuple[str, int]], default_host="127.0.0.1"):
+def _addr(addr: Union[str, Tuple[str, int]],
+          default_host: str = "127.0.0.1") -> Tuple[str, int]:
     """("host", port) from "host:port", ":port", "port" or a tuple."""
     if isinstance(addr, tuple):
         return addr[0], int(addr[1])
@@ -360,17 +364,21 @@ class Pending:
         if self.reply is None:
             if timeout is None:
                 timeout = self._gripper.motion_timeout
-            self._gripper._final(self, timeout)
-        if self.reply.status != Status.E_SUCCESS:
-            raise WsgError(self.reply.cmd, self.reply.status,
-                           self.reply.params)
-        return self.reply
+            reply = self._gripper._final(self, timeout)
+        else:
+            reply = self.reply
+        if reply.status != Status.E_SUCCESS:
+            raise WsgError(reply.cmd, reply.status, reply.params)
+        return reply
 
     def done(self) -> bool:
         """Whether the final result is here, without waiting for it."""
         if self.reply is None:
-            self._gripper._final(self, 0.0, block=False)
-        return self.reply is not None
+            try:
+                self._gripper._final(self, 0.0, block=False)
+            except WsgTimeout:
+                return False
+        return True
 
 
 class Gripper:
@@ -425,7 +433,9 @@ class Gripper:
     def __enter__(self) -> "Gripper":
         return self
 
-    def __exit__(self, *exc) -> None:
+    def __exit__(self, exc_type: Optional[Type[BaseException]],
+                 exc: Optional[BaseException],
+                 tb: Optional[TracebackType]) -> None:
         self.close()
 
     def close(self) -> None:
@@ -508,18 +518,31 @@ class Gripper:
         return r
 
     def _final(self, pending: Pending, timeout: float,
-               block: bool = True) -> None:
-        """Read until pending has its final result; WsgTimeout if it has
-        not come within timeout (block=False: only what is there now)."""
+               block: bool = True) -> Reply:
+        """Read until pending has its final result and return it;
+        WsgTimeout if it has not come within timeout (block=False: only
+        what is there now, and WsgTimeout if that is not it)."""
         deadline = time.monotonic() + timeout
         while pending.reply is None:
             frame = self._read_frame(deadline, block)
             if frame is None:
-                if not block:
-                    return
                 raise WsgTimeout("no final result for %s within %.1f s"
                                  % (_cmd_label(pending.cmd), timeout))
             self._route(frame)
+        return pending.reply
+
+    # With wait=True (the default) the answer is always a Reply: the
+    # overloads tell a type checker so, and only wait=False callers need
+    # to tell a Pending apart.
+    @overload
+    def request(self, cmd: int, payload: bytes = b"",
+                timeout: Optional[float] = None,
+                wait: "Literal[True]" = True) -> Reply: ...
+
+    @overload
+    def request(self, cmd: int, payload: bytes = b"",
+                timeout: Optional[float] = None, *,
+                wait: bool) -> Union[Reply, Pending]: ...
 
     def request(self, cmd: int, payload: bytes = b"",
                 timeout: Optional[float] = None,
@@ -554,9 +577,8 @@ class Gripper:
                 self._pending[cmd] = pending
                 if not wait:
                     return pending
-                self._final(pending, self.motion_timeout if timeout is None
-                            else timeout)
-                return pending.reply
+                return self._final(pending, self.motion_timeout
+                                   if timeout is None else timeout)
             return r
 
     def command(self, cmd: int, payload: bytes = b"",
@@ -585,9 +607,11 @@ class Gripper:
         """Homing (20h): direction None (the configured default),
         "positive" or "negative" (or 0, 1, 2). With wait=False, returns a
         Pending once the gripper has accepted the command."""
-        d = {None: 0, "default": 0, "positive": 1, "pos": 1,
-             "negative": 2, "neg": 2}.get(direction, direction)
-        if d not in (0, 1, 2):
+        names: Dict[Optional[str], int] = {
+            None: 0, "default": 0, "positive": 1, "pos": 1,
+            "negative": 2, "neg": 2}
+        d = direction if isinstance(direction, int) else names.get(direction)
+        if d is None or d not in (0, 1, 2):
             raise ValueError("homing direction: positive, negative or None")
         return self._motion(Cmd.HOMING, bytes([d]), wait, timeout)
 
@@ -681,8 +705,9 @@ class Gripper:
         p = self.command(Cmd.GET_SYSTEM_STATE)
         return SystemFlag(struct.unpack_from("<I", p)[0])
 
-    def grasp_state(self) -> GraspState:
-        """Get Grasping State (41h)."""
+    def grasp_state(self) -> Union[GraspState, int]:
+        """Get Grasping State (41h); the number itself for one the
+        protocol does not name."""
         p = self.command(Cmd.GET_GRASP_STATE)
         try:
             return GraspState(p[0])
@@ -709,7 +734,8 @@ class Gripper:
     def temperature(self) -> float:
         """Get Temperature (46h) in °C (sent as int16 of 0.1 °C)."""
         p = self.command(Cmd.GET_TEMPERATURE)
-        return struct.unpack_from("<h", p)[0] / 10
+        tenths: int = struct.unpack_from("<h", p)[0]
+        return tenths / 10
 
     def system_info(self) -> SystemInfo:
         """Get System Information (50h)."""
@@ -781,7 +807,9 @@ class Control:
     def __enter__(self) -> "Control":
         return self
 
-    def __exit__(self, *exc) -> None:
+    def __exit__(self, exc_type: Optional[Type[BaseException]],
+                 exc: Optional[BaseException],
+                 tb: Optional[TracebackType]) -> None:
         self.close()
 
     def close(self) -> None:
@@ -867,13 +895,13 @@ class Control:
 
     # The emulator.
 
-    def state(self) -> dict:
+    def state(self) -> Dict[str, Any]:
         """The gripper's state as the emulator sees it (parsed JSON)."""
-        return json.loads(self.command("state"))
+        return _json_object(self.command("state"))
 
-    def stats(self) -> dict:
+    def stats(self) -> Dict[str, Any]:
         """The loop's figures (parsed JSON)."""
-        return json.loads(self.command("stats"))
+        return _json_object(self.command("stats"))
 
     def drop(self) -> str:
         """Close every TCP connection without 07h (FAST STOP follows)."""
@@ -911,7 +939,7 @@ class Control:
         motion it left is stopped); False if none was running."""
         return self.command("script stop") == "script stopped"
 
-    def script_status(self) -> dict:
+    def script_status(self) -> Dict[str, Any]:
         """The script's state (parsed JSON): ``running``, ``failed``,
         ``error`` (None or the message of the error that ended it),
         ``file`` (the absolute path, None before any run), ``state``
@@ -919,7 +947,7 @@ class Control:
         ``registered`` (the command IDs it took, as numbers),
         ``memory``, ``memory_max`` (bytes) and ``preempted`` (how often
         its time slice ran out)."""
-        status = json.loads(self.command("script status"))
+        status = _json_object(self.command("script status"))
         for key in ("error", "file"):
             if isinstance(status.get(key), str):
                 status[key] = _text(status[key])
@@ -960,6 +988,15 @@ class Control:
         client's: after gripper(n) selects another gripper of a fleet,
         start again with script_output()."""
         return self.script_output(self.script_output_end)
+
+
+def _json_object(text: str) -> Dict[str, Any]:
+    """A JSON object the channel answered, as a dict; ControlError for
+    anything else (a daemon that does not speak this channel)."""
+    value = json.loads(text)
+    if not isinstance(value, dict):
+        raise ControlError(text, "not a JSON object")
+    return value
 
 
 def _text(s: str) -> str:

@@ -6,12 +6,18 @@ startup script), waits for the one ``ready ...`` line it prints on stdout
 once every interface is open, and hands out connected clients. ``stop()``
 ends it with SIGTERM, after which a healthy daemon exits 0; anything else
 (a crash, a sanitizer's abort) is reported with what the daemon wrote on
-stderr. The pytest fixture in ``wsgemu.plugin`` is a thin layer over this
-class.
+stderr. With ``comm_log=True`` the daemon also writes its communication
+log (``--log``) to a temporary file, which ``comm_log_text()`` reads; with
+``udp=True`` it serves UDP on a free port and answers to a free port.
+``AttachedEmulator`` gives the same clients for a daemon that runs
+already (a CI service container), started and stopped by someone else.
+The pytest fixture in ``wsgemu.plugin`` is a thin layer over these
+classes.
 """
 
 import os
 import selectors
+import socket
 import shlex
 import shutil
 import signal
@@ -19,21 +25,38 @@ import subprocess
 import tempfile
 import threading
 import time
-from typing import Dict, List, Optional, Sequence, Tuple, Union
+from types import TracebackType
+from typing import IO, Any, Dict, List, Optional, Sequence, Tuple, Type, Union
 
 from .client import Control, Gripper
 
-__all__ = ["DaemonError", "Emulator", "find_binary", "parse_ready_line"]
+__all__ = ["AttachedEmulator", "DaemonError", "Emulator", "bundled_binary",
+           "find_binary", "free_udp_port", "parse_attach",
+           "parse_ready_line"]
+
+# Where the platform wheel (scripts/wheel.sh) puts the static wsgemu and
+# wsgctl: inside the package, so installing the wheel installs them.
+BUNDLED_DIR = os.path.join(os.path.dirname(os.path.abspath(__file__)), "bin")
 
 
 class DaemonError(RuntimeError):
     """The daemon could not be found, did not start, or did not end well."""
 
 
+def bundled_binary(name: str = "wsgemu") -> Optional[str]:
+    """The program the platform wheel brought (wsgemu or wsgctl), or None
+    when the package was installed without one."""
+    path = os.path.join(BUNDLED_DIR, name)
+    return path if os.access(path, os.X_OK) else None
+
+
 def find_binary(path: Optional[str] = None) -> str:
-    """The daemon to run: path if given, else $WSGEMU, else wsgemu on
-    PATH."""
-    candidate = path or os.environ.get("WSGEMU") or shutil.which("wsgemu")
+    """The daemon to run: path if given, else $WSGEMU, else the one the
+    platform wheel bundled, else wsgemu on PATH. What is asked for by
+    name comes first; the bundled one before PATH, so the wheel's daemon
+    matches its client even where another wsgemu is installed."""
+    candidate = (path or os.environ.get("WSGEMU") or bundled_binary()
+                 or shutil.which("wsgemu"))
     if not candidate:
         raise DaemonError("no wsgemu binary: give its path (pytest "
                           "--wsgemu=PATH, or the WSGEMU environment "
@@ -51,6 +74,37 @@ def _hostport(text: str) -> Tuple[str, int]:
     return host, int(port)
 
 
+def free_udp_port(host: str = "127.0.0.1") -> int:
+    """A UDP port free on host now: bound as port 0, the kernel's choice.
+    For the daemon's answer port, so that parallel test runs (pytest-xdist,
+    two CI jobs on one machine) do not all want 1501. Between this and the
+    client's bind another program could take it; that window is short."""
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
+        s.bind((host, 0))
+        port: int = s.getsockname()[1]
+        return port
+
+
+def parse_attach(spec: str) -> Tuple[Tuple[str, int],
+                                     Optional[Tuple[str, int]]]:
+    """The addresses of a daemon to attach to: "HOST:PORT" (its TCP
+    interface), optionally followed by ",control=HOST:PORT" (its control
+    channel)."""
+    first, *rest = spec.split(",")
+    try:
+        tcp = _hostport(first.strip())
+        control = None
+        for part in rest:
+            key, sep, value = part.strip().partition("=")
+            if key != "control" or not sep:
+                raise ValueError(part)
+            control = _hostport(value)
+    except ValueError:
+        raise DaemonError("bad attach address %r: HOST:PORT or "
+                          "HOST:PORT,control=HOST:PORT" % spec) from None
+    return tcp, control
+
+
 def parse_ready_line(line: str) -> Dict[str, str]:
     """The fields of a ready line: "ready tcp=H:P control=H:P" gives
     {"tcp": "H:P", "control": "H:P"}."""
@@ -66,7 +120,133 @@ def parse_ready_line(line: str) -> Dict[str, str]:
     return fields
 
 
-class Emulator:
+class _Clients:
+    """The clients of a daemon, given its addresses: what Emulator and
+    AttachedEmulator share. ``tcp`` (list of (host, port), one per gripper
+    of a fleet), ``udp`` (list of (host, port, answer_port)),
+    ``control_addr``; ``gripper`` and ``control`` connect on first use,
+    new_gripper(), new_udp_gripper() and new_control() connect more, and
+    close_clients() closes them all."""
+
+    def __init__(self) -> None:
+        self.tcp: List[Tuple[str, int]] = []
+        self.udp: List[Tuple[str, int, int]] = []
+        self.pty: List[str] = []
+        self.control_addr: Optional[Tuple[str, int]] = None
+        self._clients: List[Union[Gripper, Control]] = []
+        self._gripper: Optional[Gripper] = None
+        self._control: Optional[Control] = None
+
+    def close_clients(self) -> None:
+        """Close every client handed out (grippers announce it with 07h)."""
+        for c in reversed(self._clients):
+            try:
+                c.close()
+            except OSError:
+                pass
+        self._clients.clear()
+        self._gripper = None
+        self._control = None
+
+    def stderr_text(self) -> str:
+        """What the daemon wrote on stderr so far ("" when unknown)."""
+        return ""
+
+    def comm_log_text(self) -> str:
+        """The daemon's communication log so far ("" when not kept)."""
+        return ""
+
+    @property
+    def tcp_addr(self) -> Tuple[str, int]:
+        if not self.tcp:
+            raise DaemonError("the daemon serves no TCP interface")
+        return self.tcp[0]
+
+    def new_gripper(self, index: int = 0, **kwargs: Any) -> Gripper:
+        """A new TCP client of gripper index (of a fleet), closed by
+        close_clients(). kwargs go to Gripper (timeout, motion_timeout)."""
+        if not self.tcp:
+            raise DaemonError("the daemon serves no TCP interface")
+        g = Gripper(self.tcp[index], **kwargs)
+        self._clients.append(g)
+        return g
+
+    def new_udp_gripper(self, index: int = 0, **kwargs: Any) -> Gripper:
+        """A new UDP client of gripper index: it receives on the port the
+        daemon answers to (one such client per gripper at a time)."""
+        if not self.udp:
+            raise DaemonError("the daemon serves no UDP interface: give it "
+                              "--udp ADDR:PORT:REMOTE")
+        host, port, remote = self.udp[index]
+        g = Gripper((host, port), transport="udp", answer_port=remote,
+                    **kwargs)
+        self._clients.append(g)
+        return g
+
+    def new_control(self, **kwargs: Any) -> Control:
+        """A new control channel client, closed by close_clients()."""
+        if self.control_addr is None:
+            raise DaemonError("the daemon serves no control channel")
+        c = Control(self.control_addr, **kwargs)
+        self._clients.append(c)
+        return c
+
+    @property
+    def gripper(self) -> Gripper:
+        """A TCP client of the (first) gripper, connected on first use."""
+        if self._gripper is None or self._gripper.closed:
+            self._gripper = self.new_gripper()
+        return self._gripper
+
+    @property
+    def control(self) -> Control:
+        """A control channel client, connected on first use."""
+        if self._control is None:
+            self._control = self.new_control()
+        return self._control
+
+
+class AttachedEmulator(_Clients):
+    """The clients of a daemon that runs already, started by someone else
+    (a CI service container): the same client API as Emulator, no process.
+    ``tcp``: its TCP interface; ``control``: its control channel, or None.
+    stop() closes the clients and leaves the daemon running."""
+
+    def __init__(self, tcp: Union[str, Tuple[str, int]],
+                 control: Union[None, str, Tuple[str, int]] = None):
+        super().__init__()
+        self.tcp = [tcp if isinstance(tcp, tuple) else _hostport(tcp)]
+        if control is not None:
+            self.control_addr = (control if isinstance(control, tuple)
+                                 else _hostport(control))
+        self.process: Optional["subprocess.Popen[bytes]"] = None
+        self.script: Optional[str] = None
+
+    @classmethod
+    def from_spec(cls, spec: str) -> "AttachedEmulator":
+        """From "HOST:PORT[,control=HOST:PORT]" (parse_attach)."""
+        tcp, control = parse_attach(spec)
+        return cls(tcp, control)
+
+    def __enter__(self) -> "AttachedEmulator":
+        return self
+
+    def __exit__(self, exc_type: Optional[Type[BaseException]],
+                 exc: Optional[BaseException],
+                 tb: Optional[TracebackType]) -> None:
+        self.stop()
+
+    @property
+    def running(self) -> bool:
+        return True
+
+    def stop(self, timeout: float = 10.0) -> int:
+        """Close the clients; the daemon is not this object's to stop."""
+        self.close_clients()
+        return 0
+
+
+class Emulator(_Clients):
     """One wsgemu process and the clients connected to it.
 
     After start(): ``ready_line`` (as printed), ``fields`` (its key=value
@@ -83,32 +263,41 @@ class Emulator:
     none. A script that cannot be read makes start() fail; one that fails
     while it starts leaves the daemon running with SF_SCRIPT_FAILURE set
     (``control.script_status()`` has its error).
+
+    ``udp=True``: the daemon also serves UDP on a free loopback port and
+    answers to another free port (free_udp_port), not the fixed 1501.
+    ``comm_log=True``: the daemon writes its communication log (``--log``)
+    to a temporary file; comm_log_text() reads it.
     """
 
     def __init__(self, binary: Optional[str] = None,
                  args: Sequence[str] = (), ready_timeout: float = 10.0,
                  interfaces: Sequence[str] = ("--tcp", "127.0.0.1:0",
                                               "--control", "127.0.0.1:0"),
-                 script: Optional[Union[str, "os.PathLike[str]"]] = None):
+                 script: Optional[Union[str, "os.PathLike[str]"]] = None,
+                 udp: bool = False, comm_log: bool = False):
+        super().__init__()
         self.binary = find_binary(binary)
         self.script = (None if script is None
                        else os.path.abspath(os.fspath(script)))
-        self.argv = [self.binary, *interfaces, *args]
+        self.argv = [self.binary, *interfaces]
+        if udp:
+            self.argv += ["--udp", "127.0.0.1:0:%d" % free_udp_port()]
+        self._log: Optional[str] = None
+        if comm_log:
+            fd, self._log = tempfile.mkstemp(prefix="wsgemu-log-")
+            os.close(fd)
+            self.argv += ["--log", self._log]
+        self.argv += args
         if self.script is not None:
             self.argv += ["--script", self.script]
         self.ready_timeout = ready_timeout
-        self.process: Optional[subprocess.Popen] = None
+        self.process: Optional["subprocess.Popen[bytes]"] = None
         self.ready_line = ""
         self.fields: Dict[str, str] = {}
-        self.tcp: List[Tuple[str, int]] = []
-        self.udp: List[Tuple[str, int, int]] = []
-        self.pty: List[str] = []
-        self.control_addr: Optional[Tuple[str, int]] = None
-        self._clients: list = []
-        self._gripper: Optional[Gripper] = None
-        self._control: Optional[Control] = None
-        self._stderr = None
+        self._stderr: Optional[IO[bytes]] = None
         self._stderr_saved = ""
+        self._log_saved = ""
         self._stdout_rest: List[bytes] = []
         self.returncode: Optional[int] = None
 
@@ -118,7 +307,9 @@ class Emulator:
         self.start()
         return self
 
-    def __exit__(self, exc_type, *exc) -> None:
+    def __exit__(self, exc_type: Optional[Type[BaseException]],
+                 exc: Optional[BaseException],
+                 tb: Optional[TracebackType]) -> None:
         # Stop in any case; a bad exit status is reported only if the
         # block itself went well, so it does not hide the first error.
         try:
@@ -135,6 +326,18 @@ class Emulator:
             return self._stderr_saved
         with open(self._stderr.name, "rb") as f:
             return f.read().decode("utf-8", "replace")
+
+    def comm_log_text(self) -> str:
+        """The communication log so far (comm_log=True), else "". The
+        daemon flushes it after each batch of events, so what a test saw
+        answered is in it."""
+        if self._log is None:
+            return self._log_saved
+        try:
+            with open(self._log, "rb") as f:
+                return f.read().decode("utf-8", "replace")
+        except OSError:
+            return ""
 
     def _fail(self, what: str) -> DaemonError:
         err = self.stderr_text().strip()
@@ -156,6 +359,7 @@ class Emulator:
                 self.argv, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
                 stderr=self._stderr, close_fds=True)
         except OSError as e:
+            self._cleanup()
             raise self._fail("cannot run wsgemu: %s" % e) from None
         try:
             line = self._read_ready_line()
@@ -241,17 +445,13 @@ class Emulator:
                 os.unlink(self._stderr.name)
             except OSError:
                 pass
-
-    def close_clients(self) -> None:
-        """Close every client handed out (grippers announce it with 07h)."""
-        for c in reversed(self._clients):
+        if self._log is not None:
+            self._log_saved = self.comm_log_text()
             try:
-                c.close()
+                os.unlink(self._log)
             except OSError:
                 pass
-        self._clients.clear()
-        self._gripper = None
-        self._control = None
+            self._log = None
 
     def stop(self, timeout: float = 10.0) -> int:
         """Close the clients, send SIGTERM and wait; the exit status.
@@ -287,54 +487,3 @@ class Emulator:
     @property
     def running(self) -> bool:
         return self.process is not None and self.process.poll() is None
-
-    # ---- clients ----
-
-    @property
-    def tcp_addr(self) -> Tuple[str, int]:
-        if not self.tcp:
-            raise DaemonError("the daemon serves no TCP interface")
-        return self.tcp[0]
-
-    def new_gripper(self, index: int = 0, **kwargs) -> Gripper:
-        """A new TCP client of gripper index (of a fleet), closed by
-        stop(). kwargs go to Gripper (timeout, motion_timeout)."""
-        if not self.tcp:
-            raise DaemonError("the daemon serves no TCP interface")
-        g = Gripper(self.tcp[index], **kwargs)
-        self._clients.append(g)
-        return g
-
-    def new_udp_gripper(self, index: int = 0, **kwargs) -> Gripper:
-        """A new UDP client of gripper index: it receives on the port the
-        daemon answers to (one such client per gripper at a time)."""
-        if not self.udp:
-            raise DaemonError("the daemon serves no UDP interface: give it "
-                              "--udp ADDR:PORT:REMOTE")
-        host, port, remote = self.udp[index]
-        g = Gripper((host, port), transport="udp", answer_port=remote,
-                    **kwargs)
-        self._clients.append(g)
-        return g
-
-    def new_control(self, **kwargs) -> Control:
-        """A new control channel client, closed by stop()."""
-        if self.control_addr is None:
-            raise DaemonError("the daemon serves no control channel")
-        c = Control(self.control_addr, **kwargs)
-        self._clients.append(c)
-        return c
-
-    @property
-    def gripper(self) -> Gripper:
-        """A TCP client of the (first) gripper, connected on first use."""
-        if self._gripper is None or self._gripper.closed:
-            self._gripper = self.new_gripper()
-        return self._gripper
-
-    @property
-    def control(self) -> Control:
-        """A control channel client, connected on first use."""
-        if self._control is None:
-            self._control = self.new_control()
-        return self._control

@@ -11,7 +11,7 @@
 #   2. the .deb from cpack: its fields (name, version, architecture,
 #      dependencies, conffiles), its changelog (this version) and its
 #      files; lintian finds no error and no warning in it (where lintian
-#      is installed; scripts/deps.sh installs it); dpkg installs it into a
+#      is installed; scripts/deps.sh --test installs it); dpkg installs it into a
 #      scratch root with a database of its own, the installed wsgemu
 #      serves with the installed config, wsgctl talks to it; dpkg purges
 #      it without leaving a file behind.
@@ -394,7 +394,7 @@ if command -v lintian >/dev/null 2>&1; then
         fail "lintian: status $st, or errors or warnings"
     fi
 else
-    check "no lintian here (scripts/deps.sh installs it): not run (skipped)"
+    check "no lintian here (scripts/deps.sh --test installs it): not run (skipped)"
 fi
 
 check "the package's files"

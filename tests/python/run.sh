@@ -1,11 +1,12 @@
 #!/bin/bash
 # run.sh: the Python package's tests against a build's daemon. Makes a venv
-# with Debian's python3 that sees the system's pytest (python3-pytest), runs
-# `pip install PYDIR` into it, as a user would, and runs PYDIR/tests with the
-# daemon given. pip needs no package index: the package builds with its own
-# stdlib-only backend (python/_backend). Debian's /usr/bin/python3, not the
-# first python3 on PATH: that may be another installation without the
-# system's pytest.
+# with Debian's python3 that sees the system's pytest (python3-pytest) and
+# build backend (python3-setuptools, python3-wheel), runs `pip install
+# --no-build-isolation PYDIR` into it, as python/README.md tells a user to,
+# and runs PYDIR/tests with the daemon given. pip needs no package index:
+# without build isolation it builds with Debian's setuptools instead of
+# downloading one. Debian's /usr/bin/python3, not the first python3 on PATH:
+# that may be another installation (pyenv's) without the system's packages.
 #
 # Usage: run.sh WSGEMU PYDIR VENV [PYTEST_ARGS...]
 # Environment: WSG_TEST_TIME_SCALE (a number >= 1) multiplies the tests'
@@ -28,10 +29,11 @@ if [ ! -x "$py" ]; then
     echo "run.sh: skipped: no $py (apt-get install python3)"
     exit 77
 fi
-for mod in venv ensurepip pytest; do
+for mod in venv ensurepip pytest setuptools wheel; do
     if ! "$py" -c "import $mod" 2>/dev/null; then
         echo "run.sh: skipped: $py has no module $mod" \
-             "(scripts/deps.sh --test installs python3-venv python3-pytest)"
+             "(scripts/deps.sh --test installs python3-venv python3-pytest" \
+             "python3-setuptools python3-wheel)"
         exit 77
     fi
 done
@@ -47,7 +49,15 @@ if ! "$py" -m venv --clear --system-site-packages "$venv"; then
     echo "run.sh: cannot make the venv $venv" >&2
     exit 1
 fi
-if ! "$venv/bin/python" -m pip install --no-index --quiet "$pydir"; then
+# setuptools builds in the directory it is given (build/, *.egg-info):
+# build from a copy in the build tree, so nothing is written into the
+# sources.
+src=$venv/src
+mkdir -p "$src" && rm -rf "$src/wsgemu" &&
+    cp -R "$pydir/pyproject.toml" "$pydir/README.md" "$pydir/wsgemu" "$src/" ||
+    { echo "run.sh: cannot copy $pydir to $src" >&2; exit 1; }
+if ! "$venv/bin/python" -m pip install --no-index --no-build-isolation \
+        --quiet "$src"; then
     echo "run.sh: pip install $pydir failed" >&2
     exit 1
 fi

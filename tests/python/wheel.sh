@@ -1,0 +1,74 @@
+#!/bin/bash
+# wheel.sh (test): the platform wheel gives the fixture and the emulator in
+# one step. Builds it with scripts/wheel.sh, installs it with pip --no-index
+# (nothing else) into a new venv of Debian's python3, and runs a tiny pytest
+# that uses the wsgemu fixture with no WSGEMU set and no wsgemu on PATH:
+# the daemon it runs must be the one inside the wheel. The venv sees the
+# system's site-packages for pytest alone (Debian ships no pytest wheel to
+# install offline); the test first checks that no wsgemu package is
+# importable there, so only the wheel can provide it.
+#
+# Usage: wheel.sh SRC WORKDIR
+# Exit status: 0 passed, 1 failed, 77 no Debian python3 with venv, pytest,
+#   setuptools and wheel here (scripts/deps.sh --test installs them).
+set -u
+
+if [ $# -ne 2 ]; then
+    echo "usage: wheel.sh SRC WORKDIR" >&2
+    exit 1
+fi
+src=$1
+work=$2
+py=/usr/bin/python3
+for mod in venv ensurepip pytest setuptools wheel; do
+    if ! "$py" -c "import $mod" 2>/dev/null; then
+        echo "wheel.sh: skipped: $py has no module $mod (scripts/deps.sh --test)"
+        exit 77
+    fi
+done
+export PYTHONDONTWRITEBYTECODE=1 PIP_NO_INPUT=1 PIP_DISABLE_PIP_VERSION_CHECK=1
+
+mkdir -p "$work" || exit 1
+whl=$("$src/scripts/wheel.sh" --build-dir "$work/static" \
+    --out "$work/dist" 2>"$work/build.log") ||
+    { cat "$work/build.log" >&2; echo "wheel.sh: no wheel" >&2; exit 1; }
+echo "wheel.sh: built $whl"
+
+venv=$work/venv
+"$py" -m venv --clear --system-site-packages "$venv" || exit 1
+if "$venv/bin/python" -c "import wsgemu" 2>/dev/null; then
+    echo "wheel.sh: a wsgemu package is importable before the install" >&2
+    exit 1
+fi
+"$venv/bin/python" -m pip install --quiet --no-index "$whl" || exit 1
+
+tests=$work/tests
+rm -rf "$tests" && mkdir -p "$tests"
+cat > "$tests/test_one_step.py" <<'PY'
+import os
+import subprocess
+
+import wsgemu as wsgemu_pkg  # the name wsgemu is the fixture's below
+
+
+def test_the_fixture_runs_the_bundled_daemon(wsgemu):
+    assert "WSGEMU" not in os.environ
+    bundled = os.path.join(os.path.dirname(wsgemu_pkg.__file__), "bin")
+    assert os.path.dirname(wsgemu.binary) == bundled
+    assert wsgemu.gripper.loop(b"one step") == b"one step"
+
+
+def test_wsgctl_is_bundled_too():
+    wsgctl = wsgemu_pkg.bundled_binary("wsgctl")
+    assert wsgctl is not None
+    subprocess.run([wsgctl, "--help"], check=True, capture_output=True)
+
+PY
+# PATH: the venv's bin only, where no wsgemu is; WSGEMU unset.
+if PATH="$venv/bin" command -v wsgemu >/dev/null; then
+    echo "wheel.sh: a wsgemu on the test's PATH" >&2
+    exit 1
+fi
+cd "$tests" || exit 1
+exec env -u WSGEMU PATH="$venv/bin" "$venv/bin/python" -m pytest \
+    -p no:cacheprovider -q "$tests"
