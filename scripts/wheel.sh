@@ -11,7 +11,7 @@
 # Usage: scripts/wheel.sh [--build-dir DIR] [--out DIR]
 #   --build-dir DIR  the static build tree (default build-static)
 #   --out DIR        where the wheel goes (default DIR of --build-dir/wheel)
-# Prints the wheel's path. Run scripts/deps.sh first.
+# Prints the wheel's path. Run scripts/deps.sh --test first.
 set -eu
 
 ME=wheel.sh
