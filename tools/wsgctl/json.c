@@ -3,21 +3,14 @@
  * command's values are gathered while it runs (jout_*: the fields of
  * print_values, the channel's answers, the echo of a loop) and the object
  * is written once it has ended, with "error" and "exit" when it failed.
- * The reason of a failure is what wsgctl said on stderr: err() has no
- * context to write into, so rather than thread one through every call,
- * stderr is gathered while the command runs (json_capture_begin) and
- * passed on when it has ended (json_capture_end); its last line becomes
- * "error".
+ * The reason of a failure is the last thing wsgctl said on stderr
+ * (err_last), which still goes to stderr as well.
  */
-#define _GNU_SOURCE /* fileno */
-
 #include "wsgctl.h"
 
-#include <errno.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <string.h>
-#include <unistd.h>
 
 /* Append to the object's fields; what does not fit is cut, and said so
  * once at the end (jout_print). */
@@ -176,68 +169,4 @@ void jout_print(const struct jout *j, const char *command, int rc,
     }
     fputs("}\n", stdout);
     fflush(stdout);
-}
-
-/* Send stderr into a temporary file until json_capture_end; 0 or -errno
- * (stderr is then left as it was). */
-int json_capture_begin(struct json_capture *c)
-{
-    int rc;
-
-    fflush(stderr);
-    c->file = tmpfile();
-    if (!c->file)
-        return -errno;
-    c->saved = dup(STDERR_FILENO);
-    if (c->saved < 0) {
-        rc = -errno;
-        goto fail_file;
-    }
-    if (dup2(fileno(c->file), STDERR_FILENO) < 0) {
-        rc = -errno;
-        goto fail_saved;
-    }
-    return 0;
-
-fail_saved:
-    close(c->saved);
-fail_file:
-    fclose(c->file);
-    c->file = NULL;
-    return rc;
-}
-
-/* Put stderr back and write to it what was said meanwhile; its last line,
- * without "wsgctl: ", into last (empty if nothing was said). */
-void json_capture_end(struct json_capture *c, char *last, size_t cap)
-{
-    char buf[4096];
-    size_t n;
-
-    last[0] = '\0';
-    if (!c->file)
-        return;
-    fflush(stderr);
-    dup2(c->saved, STDERR_FILENO);
-    close(c->saved);
-    rewind(c->file);
-    while ((n = fread(buf, 1, sizeof buf, c->file)) > 0) {
-        fwrite(buf, 1, n, stderr);
-        for (const char *p = buf, *end = buf + n; p < end;) {
-            const char *nl = memchr(p, '\n', (size_t)(end - p));
-            size_t len = nl ? (size_t)(nl - p) : (size_t)(end - p);
-
-            if (!strncmp(p, "wsgctl: ", len < 8 ? len : 8) && len >= 8) {
-                p += 8;
-                len -= 8;
-            }
-            if (len > 0 && len < cap) {
-                memcpy(last, p, len);
-                last[len] = '\0';
-            }
-            p += len + (nl ? 1 : 0);
-        }
-    }
-    fclose(c->file);
-    c->file = NULL;
 }

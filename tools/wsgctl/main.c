@@ -37,15 +37,23 @@
 /* Set by SIGINT/SIGTERM: see wsgctl.h. */
 volatile sig_atomic_t interrupted;
 
+/* The last thing err() said, for --json's "error": like errno, the one
+ * piece of state of the process's error channel. */
+static char last_error[512];
+
 void err(const char *fmt, ...)
 {
     va_list ap;
 
-    fputs("wsgctl: ", stderr);
     va_start(ap, fmt);
-    vfprintf(stderr, fmt, ap);
+    vsnprintf(last_error, sizeof last_error, fmt, ap);
     va_end(ap);
-    fputc('\n', stderr);
+    fprintf(stderr, "wsgctl: %s\n", last_error);
+}
+
+const char *err_last(void)
+{
+    return last_error;
 }
 
 static void on_signal(int sig)
@@ -642,8 +650,7 @@ static int check_command(const struct ctx *x, const struct command *cmd,
 int main(int argc, char **argv)
 {
     struct ctx x;
-    char *pos[2 + WSG_PAYLOAD_MAX], tcp_addr[300], error[1024];
-    struct json_capture cap = {NULL, -1};
+    char *pos[2 + WSG_PAYLOAD_MAX], tcp_addr[300];
     struct jout *jo = NULL;
     int npos = 0, rc;
     const struct command *cmd = NULL;
@@ -657,15 +664,11 @@ int main(int argc, char **argv)
             err("out of memory");
             return EXIT_CONN;
         }
-        /* Without stderr gathered the object would lack its reason: go on
-         * without it rather than fail. */
-        json_capture_begin(&cap);
     }
     rc = parse_args(argc, argv, &x, pos, &npos);
     if (rc < 0) {
         /* --help, --version: answered, as text. */
         if (jo) {
-            json_capture_end(&cap, error, sizeof error);
             free(jo);
             jo = NULL;
         }
@@ -721,13 +724,12 @@ int main(int argc, char **argv)
         rc = EXIT_OK;
 out:
     if (jo) {
-        json_capture_end(&cap, error, sizeof error);
         if (rc != EXIT_OK || !jo->streamed)
             jout_print(jo,
                        cmd    ? cmd->name
                        : npos ? pos[0]
                               : "",
-                       rc, error[0] ? error : "failed");
+                       rc, err_last()[0] ? err_last() : "failed");
         free(jo);
     }
     return rc;

@@ -49,12 +49,6 @@ struct jout {
     unsigned status;
 };
 
-/* stderr gathered while a command runs under --json (json.c). */
-struct json_capture {
-    FILE *file;
-    int saved; /* the real stderr */
-};
-
 struct opts {
     enum link_kind kind;
     const char *addr;
@@ -112,6 +106,9 @@ typedef void (*pending_fn)(const struct opts *o,
 /* ---- options and their arguments; messages (main.c) ---- */
 
 void err(const char *fmt, ...);
+/* What err() said last, without "wsgctl: " ("" if nothing): --json's
+ * "error". */
+const char *err_last(void);
 int parse_float(const char *s, float *v);
 int parse_ulong(const char *s, unsigned long max, unsigned long *v);
 int split_addr(const char *addr, char *host, size_t cap, unsigned long *port,
@@ -188,8 +185,6 @@ void jout_value(struct jout *j, const struct wsg_value *v);
 void jout_print(const struct jout *j, const char *command, int rc,
                 const char *error);
 void json_write_str(FILE *f, const char *s, size_t n);
-int json_capture_begin(struct json_capture *c);
-void json_capture_end(struct json_capture *c, char *last, size_t cap);
 
 /* ---- GCL, the text interface (text.c) ---- */
 
