@@ -26,7 +26,8 @@
  * Events of a session, of the gripper and of the world show as
  *   HH:MM:SS.mmm t=SIM WHO event TEXT
  * WHO being the session's peer, "gripper" for what the model did by
- * itself, "control" for the control channel. TEXT is one of:
+ * itself, "control" for the control channel, "web" for the web page's
+ * STOP and ACK. TEXT is one of:
  *   connected                    a TCP connection accepted
  *   closed (07h)                 it closed after a Disconnect Announcement
  *   closed without 07h           it closed without one
@@ -34,6 +35,7 @@
  *                                fault (power or current) or soft-limit
  *   ack fast-stop cleared        24h acknowledged a FAST STOP
  *   ack nothing to clear         24h with no FAST STOP to acknowledge
+ *   stop                         the web page's STOP
  *   part W S | part none | obstacle W | obstacle none | fault NAME on|off
  *   | reset                      a control command that changed the world
  */

@@ -333,6 +333,11 @@ static void test_log(struct emu_client *c)
     CHECK(see_log(&s, " in 43h GetOpeningWidth\n",
                   " out 43h GetOpeningWidth E_SUCCESS width="));
     CHECK(s.id[0] != '\0');
+    /* The sidebar's STOP and ACK are events of the log, as 22h and 24h. */
+    CHECK_EQ(get("POST", "/stop", NULL, NULL), 200);
+    CHECK(see_log(&s, " web event stop", ""));
+    CHECK_EQ(get("POST", "/ack", NULL, NULL), 200);
+    CHECK(see_log(&s, " web event ack nothing to clear", ""));
     http_stream_close(&s);
 
     /* Reconnected with its last id: only what is new. */

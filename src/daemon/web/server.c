@@ -690,8 +690,15 @@ static enum MHD_Result serve_action(struct wsg_web *web,
                                     struct wsg_web_req *req, int ack)
 {
     struct wsg_axis *ax = wsg_device_axis(&web->g->dev);
+    int fast_stop;
 
     wsg_web_touch(web);
+    fast_stop = (wsg_device_flags(&web->g->dev) & WSG_SF_FAST_STOP) != 0;
+    /* In the communication log as the interfaces' 22h and 24h are. */
+    wsg_device_event(&web->g->dev, "web",
+                     !ack        ? "stop"
+                     : fast_stop ? "ack fast-stop cleared"
+                                 : "ack nothing to clear");
     if (ack)
         wsg_axis_request_ack(ax);
     else
