@@ -11,6 +11,7 @@
  * is settled at once, so the next call already sees it (as the dispatcher
  * settles after each command).
  */
+#include <errno.h>
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
@@ -693,7 +694,7 @@ static int api_searcher(lua_State *L)
     struct wsg_script *h = wsg_script_of(L);
     const char *name = luaL_checkstring(L, 1), *path, *c;
     luaL_Buffer b;
-    FILE *f;
+    int r;
 
     luaL_buffinit(L, &b);
     luaL_addstring(&b, h->dir);
@@ -703,13 +704,15 @@ static int api_searcher(lua_State *L)
     luaL_addstring(&b, ".lua");
     luaL_pushresult(&b);
     path = lua_tostring(L, -1);
-    f = fopen(path, "r");
-    if (!f) {
+    r = wsg_script_loadfile(L, path);
+    if (r == -ENOENT || r == -ENOTDIR) {
         lua_pushfstring(L, "no file '%s'", path);
         return 1;
     }
-    fclose(f);
-    if (luaL_loadfilex(L, path, "t") != LUA_OK)
+    if (r < 0)
+        return luaL_error(L, "error loading module '%s' from file '%s':\n\t%s",
+                          name, path, strerror(-r));
+    if (r != LUA_OK)
         return luaL_error(L, "error loading module '%s' from file '%s':\n\t%s",
                           name, path, lua_tostring(L, -1));
     lua_pushvalue(L, -2); /* the loader's second argument: the file */

@@ -7,14 +7,17 @@
  * that is. The memory cap is the allocator's; preemption is a count hook
  * that yields the body when its slice is used up.
  */
-#define _GNU_SOURCE /* realpath */
+#define _GNU_SOURCE /* realpath, O_NOFOLLOW */
 
 #include "script_impl.h"
 
 #include <errno.h>
+#include <fcntl.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include <lauxlib.h>
 
@@ -312,6 +315,59 @@ void wsg_script_free(struct wsg_script *h)
     free(h);
 }
 
+int wsg_script_loadfile(lua_State *L, const char *path)
+{
+    struct stat st;
+    size_t len = 0, skip = 0;
+    char *buf = NULL;
+    ssize_t n;
+    int fd, r;
+
+    fd = open(path, O_RDONLY | O_NOFOLLOW | O_CLOEXEC);
+    if (fd < 0)
+        return -errno;
+    if (fstat(fd, &st) < 0) {
+        r = -errno;
+        goto out;
+    }
+    if (!S_ISREG(st.st_mode)) {
+        r = -EINVAL;
+        goto out;
+    }
+    if (st.st_size > (off_t)WSG_SCRIPT_SOURCE_MAX) {
+        r = -EFBIG;
+        goto out;
+    }
+    buf = malloc((size_t)st.st_size + 1);
+    if (!buf) {
+        r = -ENOMEM;
+        goto out;
+    }
+    /* What the file holds now, even if it grew since fstat. */
+    while (len < (size_t)st.st_size &&
+           (n = read(fd, buf + len, (size_t)st.st_size - len)) != 0) {
+        if (n < 0 && errno == EINTR)
+            continue;
+        if (n < 0) {
+            r = -errno;
+            goto out;
+        }
+        len += (size_t)n;
+    }
+    /* A first line starting with '#' (a "#!" line) is skipped, as Lua's
+     * loadfile skips it; a blank in its place keeps the line numbers. */
+    if (len && buf[0] == '#')
+        while (skip < len && buf[skip] != '\n')
+            buf[skip++] = ' ';
+    lua_pushfstring(L, "@%s", path);
+    r = luaL_loadbufferx(L, buf, len, lua_tostring(L, -1), "t");
+    lua_remove(L, -2); /* the name */
+out:
+    free(buf);
+    close(fd);
+    return r;
+}
+
 /* Load the file as the body of a fresh state. 0, or -errno/-EINVAL with
  * the reason in err (a compile error fails the script). */
 static int script_load(struct wsg_script *h, char *err, size_t errlen)
@@ -330,11 +386,15 @@ static int script_load(struct wsg_script *h, char *err, size_t errlen)
     h->co = lua_newthread(h->L);
     /* Kept in the registry so the collector leaves it while it runs. */
     lua_setfield(h->L, LUA_REGISTRYINDEX, "wsg.body");
-    st = luaL_loadfilex(h->co, h->file, "t");
+    st = wsg_script_loadfile(h->co, h->file);
     if (st != LUA_OK) {
-        const char *m = lua_tostring(h->co, -1);
+        const char *m = st > 0 ? lua_tostring(h->co, -1) : NULL;
 
-        snprintf(err, errlen, "%s", m ? m : "cannot load the script");
+        if (st < 0)
+            snprintf(err, errlen, "cannot read %s: %s", h->file,
+                     strerror(-st));
+        else
+            snprintf(err, errlen, "%s", m ? m : "cannot load the script");
         wsg_script_print(h, "error: ", 7);
         wsg_script_print(h, err, strlen(err));
         wsg_script_print(h, "\n", 1);

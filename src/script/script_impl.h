@@ -55,6 +55,19 @@ static inline struct wsg_script *wsg_script_of(lua_State *L)
     return *(struct wsg_script **)lua_getextraspace(L);
 }
 
+/* The largest script or module file the host loads. */
+#define WSG_SCRIPT_SOURCE_MAX (4u << 20)
+
+/* Load the Lua source file at path (text only, never a binary chunk) as
+ * a function on L's stack, named "@path" in messages. The file is opened
+ * once and read from that descriptor, and a symbolic link as its last
+ * component is not followed: a file checked before cannot be swapped for
+ * a link to another one. 0 (the function pushed); a Lua error status
+ * (its message pushed) when it does not compile; -errno (nothing pushed)
+ * when it cannot be read: -ELOOP for a link, -EFBIG past
+ * WSG_SCRIPT_SOURCE_MAX. */
+int wsg_script_loadfile(lua_State *L, const char *path);
+
 /* Open the script's libraries (api.c) in L: the sandboxed standard ones,
  * the gripper's and the Lua 5.1/5.2 names. */
 void wsg_script_open_api(lua_State *L, struct wsg_script *h);

@@ -1287,7 +1287,8 @@ static char sandbox_dir[128];
 static void sandbox_remove(void)
 {
     static const char *const files[] = {"user/sandbox.lua", "user/wire.lua",
-                                        "user/binmod.lua", "outside.lua"};
+                                        "user/binmod.lua", "user/linked.lua",
+                                        "outside.lua"};
     char path[256];
     size_t i;
 
@@ -1332,7 +1333,7 @@ static int copy_script(const char *name)
 static void sandbox_setup(void)
 {
     static const char outside[] = "return 'outside'\n";
-    char path[256];
+    char path[256], link[256];
 
     snprintf(sandbox_dir, sizeof sandbox_dir, "/tmp/wsgemu-script-XXXXXX");
     REQUIRE(mkdtemp(sandbox_dir) != NULL);
@@ -1343,6 +1344,10 @@ static void sandbox_setup(void)
     REQUIRE(copy_script("wire.lua") == 0);
     snprintf(path, sizeof path, "%s/outside.lua", sandbox_dir);
     REQUIRE(write_file(path, outside, sizeof outside - 1) == 0);
+    /* A link beside the script to that module: require does not follow
+     * it (nor the host a link that replaced a script it checked). */
+    snprintf(link, sizeof link, "%s/user/linked.lua", sandbox_dir);
+    REQUIRE(symlink(path, link) == 0);
 }
 
 /* What the script cannot reach or load. */
@@ -1376,6 +1381,10 @@ static void sandbox_closed(struct emu_client *c)
     CHECK_HAS(msg, "error:error loading module 'binmod' from file '");
     CHECK_HAS(msg, "binmod.lua': attempt to load a binary chunk (mode is "
                    "'t')");
+    msg = field(t, 2);
+    CHECK_HAS(msg, "error:error loading module 'linked' from file '");
+    CHECK_HAS(msg, "linked.lua': " /* ELOOP's words */);
+    CHECK(strstr(msg, "symbolic links") != NULL);
 }
 
 static void part_sandbox(const char *exe)

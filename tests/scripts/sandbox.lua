@@ -50,9 +50,12 @@ end
 -- directory).
 h[0xB1] = function(id, p)
   local bin_ok, bin_err = pcall(require, "binmod")
+  -- linked.lua beside the script is a symbolic link to a file outside.
+  local link_ok, link_err = pcall(require, "linked")
   package.path = wire.string(p) .. "/?.lua"
   local ok, err = pcall(require, "outside")
-  wire.reply(id, outcome(ok, err), outcome(bin_ok, bin_err, nil, true))
+  wire.reply(id, outcome(ok, err), outcome(bin_ok, bin_err, nil, true),
+             outcome(link_ok, link_err, nil, true))
 end
 
 -- A precompiled chunk, for the test to put beside the script.
