@@ -18,6 +18,7 @@
  * fuzz_bench_begin resets all of it.
  */
 #include "fuzz_bench.h"
+#include "fuzz_axis.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -34,7 +35,6 @@
  * 42 s of 1 ms steps; motions that are still running after this never end. */
 #define FUZZ_END_STEPS 100000L
 /* Floating-point slack for limits the model clamps to. */
-#define FUZZ_EPS 1e-6
 
 enum fuzz_phase {
     FUZZ_PH_IDLE,  /* nothing may be sent */
@@ -106,27 +106,13 @@ static void fuzz_check_flags(uint32_t f)
     FUZZ_CHECK(!(f & (WSG_SF_SCRIPT_RUNNING | WSG_SF_SCRIPT_FAILURE)));
 }
 
-/* The model within its limits. ax->width is the width as reported; the
- * physical distance is that minus ref_offset, which a homing that blocked
- * on a part or an obstacle makes nonzero (3.2.1; docs/behaviour.md): after
- * that the reported width may leave 0..stroke, as on the real gripper. So
- * the physical width is checked always, the reported one while the
- * reference is true. */
+/* The model within its limits (fuzz_axis.h), its grasping state and its
+ * flags. */
 static void fuzz_check_model(void)
 {
     const struct wsg_axis *ax = wsg_device_axis(&B.dev);
-    const struct wsg_axis_config *c = &ax->cfg;
-    double phys = ax->width - ax->ref_offset;
 
-    FUZZ_CHECK(isfinite(ax->width) && isfinite(ax->speed));
-    FUZZ_CHECK(isfinite(ax->force) && isfinite(ax->temperature));
-    FUZZ_CHECK(isfinite(ax->ref_offset));
-    FUZZ_CHECK(phys >= -FUZZ_EPS && phys <= c->stroke + FUZZ_EPS);
-    if (ax->ref_offset == 0.0)
-        FUZZ_CHECK(ax->width >= -FUZZ_EPS &&
-                   ax->width <= c->stroke + FUZZ_EPS);
-    FUZZ_CHECK(fabs(ax->speed) <= c->max_speed + FUZZ_EPS);
-    FUZZ_CHECK(ax->force >= -FUZZ_EPS && ax->force <= c->ovr_force + FUZZ_EPS);
+    fuzz_check_axis(ax);
     FUZZ_CHECK((unsigned)ax->grasp_state <= WSG_GS_ERROR);
     fuzz_check_flags(wsg_axis_flags(ax));
 }

@@ -44,6 +44,7 @@
 #include <string.h>
 
 #include "axis_impl.h"
+#include "fuzz_axis.h"
 #include "fuzz_check.h"
 #include "wsg/device.h"
 #include "wsg/gcl.h"
@@ -62,7 +63,6 @@ int FUZZ_ENTRY(const uint8_t *data, size_t size);
 /* Motions acknowledged and not finished: one at a time on one axis; the
  * room is for a violation to show as one rather than as an overflow. */
 #define FUZZ_OWED 8
-#define FUZZ_EPS  1e-6
 
 /* ---- the chunk generator ---- */
 
@@ -472,24 +472,15 @@ static void fuzz_trace_line(void *ctx, const struct wsg_session *s,
     snprintf(G.name, sizeof G.name, "%s", c.name[0] ? c.name : "?");
 }
 
-/* The model within its limits, as fuzz_bench checks it: the physical width
- * always, the reported one while no homing has shifted the reference. */
+/* The model within its limits (fuzz_axis.h), and the force limit GCL's
+ * GRIP sets. */
 static void fuzz_check_model(void)
 {
     const struct wsg_axis *ax = wsg_device_axis(&G.dev);
-    const struct wsg_axis_config *c = &ax->cfg;
-    double phys = ax->width - ax->ref_offset;
 
-    FUZZ_CHECK(isfinite(ax->width) && isfinite(ax->speed));
-    FUZZ_CHECK(isfinite(ax->force) && isfinite(ax->ref_offset));
-    FUZZ_CHECK(phys >= -FUZZ_EPS && phys <= c->stroke + FUZZ_EPS);
-    if (ax->ref_offset == 0.0)
-        FUZZ_CHECK(ax->width >= -FUZZ_EPS &&
-                   ax->width <= c->stroke + FUZZ_EPS);
-    FUZZ_CHECK(fabs(ax->speed) <= c->max_speed + FUZZ_EPS);
-    FUZZ_CHECK(ax->force >= -FUZZ_EPS && ax->force <= c->ovr_force + FUZZ_EPS);
+    fuzz_check_axis(ax);
     FUZZ_CHECK(ax->force_limit >= 0 &&
-               ax->force_limit <= c->ovr_force + FUZZ_EPS);
+               ax->force_limit <= ax->cfg.ovr_force + FUZZ_AXIS_EPS);
 }
 
 static void fuzz_open(void)
