@@ -102,52 +102,29 @@ static int gcl_sample(struct link *l, double *us)
     return 0;
 }
 
-/* 43h, its answer checked as the latency rows check it. */
-static int bin_sample(struct link *l, double *us)
+/* The GCL daemon's POS? (side GCL_TEXT) or the binary one's 43h. */
+static int gcl_take(void *ctx, int side, double *us)
 {
-    return sample(l, us);
+    struct gdaemon *d = ctx;
+
+    return side == GCL_TEXT ? gcl_sample(&d[GCL_TEXT].l, us)
+                            : sample(&d[GCL_BIN].l, us);
 }
 
 int bench_gcl(struct bench *b)
 {
     struct gdaemon d[2];
-    size_t per = (size_t)(b->o.samples / ROUNDS), warm, i;
-    double *lat[2] = {NULL, NULL}, dummy;
-    size_t n[2] = {0, 0};
     struct dist dd[2] = {{NAN, NAN, NAN}, {NAN, NAN, NAN}};
-    int round, k, s, rc = -1;
+    int s, rc = -1;
     struct row *r;
 
     d[GCL_TEXT].started = d[GCL_BIN].started = 0;
     link_init(&d[GCL_TEXT].l, L_TCP, "wsgemu --text-interface");
     link_init(&d[GCL_BIN].l, L_TCP, "wsgemu");
-    if (per == 0)
-        per = 1;
-    warm = per < 200 ? 200 : per > 2000 ? 2000 : per;
     if (gd_start(b, &d[GCL_TEXT], 1, "wsgemu --text-interface") < 0 ||
         gd_start(b, &d[GCL_BIN], 0, "wsgemu") < 0)
         goto cleanup;
-    for (s = 0; s < 2; s++) {
-        lat[s] = malloc(per * ROUNDS * sizeof(double));
-        if (!lat[s])
-            goto cleanup;
-    }
-    for (i = 0; i < warm; i++)
-        if (gcl_sample(&d[GCL_TEXT].l, &dummy) < 0 ||
-            bin_sample(&d[GCL_BIN].l, &dummy) < 0)
-            goto cleanup;
-    for (round = 0; round < ROUNDS; round++) {
-        for (k = 0; k < 2; k++) {
-            s = (round + k) % 2;
-            for (i = 0; i < per; i++)
-                if ((s == GCL_TEXT ? gcl_sample(&d[s].l, &lat[s][n[s]++])
-                                   : bin_sample(&d[s].l, &lat[s][n[s]++])) < 0)
-                    goto cleanup;
-        }
-    }
-    dd[GCL_TEXT] = dist_of(lat[GCL_TEXT], n[GCL_TEXT]);
-    dd[GCL_BIN] = dist_of(lat[GCL_BIN], n[GCL_BIN]);
-    rc = 0;
+    rc = alternate(b, gcl_take, NULL, d, dd);
 cleanup:
     for (s = 0; s < 2; s++)
         if (gd_stop(&d[s], s == GCL_TEXT) < 0)
@@ -157,7 +134,5 @@ cleanup:
     set_target(r, T_LE, 1.25, 1, "ratio <= 1.25");
     add_row(b, "GCL POS? round trip p99 (us)", dd[GCL_TEXT].p99,
             dd[GCL_BIN].p99, 1);
-    for (s = 0; s < 2; s++)
-        free(lat[s]);
     return rc;
 }

@@ -155,64 +155,51 @@ static int rt_sample(struct link *l, const uint8_t *req, size_t n, uint8_t id,
     return 0;
 }
 
+/* One round trip on the script daemon's connection: [EMU] the script's
+ * B0h, [REF] the firmware's 43h. */
+struct echo_bench {
+    struct sdaemon d;
+    uint8_t req[WSG_HEADER_LEN + 4 + WSG_CRC_LEN];
+};
+
+static int echo_take(void *ctx, int side, double *us)
+{
+    struct echo_bench *e = ctx;
+
+    return side == EMU
+               ? rt_sample(&e->d.l, e->req, sizeof e->req, SCRIPT_ECHO, us)
+               : rt_sample(&e->d.l, req_width, sizeof req_width,
+                           WSG_CMD_GET_WIDTH, us);
+}
+
 /* B0h through bench_echo.lua against 43h, then the daemon at rest with
  * its script in cmd.read. */
 static int bench_script_echo(struct bench *b)
 {
     static const uint8_t four[4] = {1, 2, 3, 4};
-    struct sdaemon d;
-    uint8_t req_echo[WSG_HEADER_LEN + sizeof four + WSG_CRC_LEN];
-    size_t per = (size_t)(b->o.samples / ROUNDS), warm, i;
-    double *lat[2] = {NULL, NULL}, dummy, w0, w1, wakes = NAN;
-    size_t n[2] = {0, 0};
+    struct echo_bench e;
+    struct sdaemon *d = &e.d;
+    double w0, w1, wakes = NAN;
     struct dist dd[2] = {{NAN, NAN, NAN}, {NAN, NAN, NAN}};
-    int round, k, s, rc = -1;
+    int rc = -1;
     struct row *r;
 
-    if (per == 0)
-        per = 1;
-    warm = per < 200 ? 200 : per > 2000 ? 2000 : per;
-    wsg_frame_encode(req_echo, sizeof req_echo, SCRIPT_ECHO, four,
-                     sizeof four);
-    if (sd_start(b, &d, "bench_echo.lua", "wsgemu --script bench_echo") < 0)
+    wsg_frame_encode(e.req, sizeof e.req, SCRIPT_ECHO, four, sizeof four);
+    if (sd_start(b, d, "bench_echo.lua", "wsgemu --script bench_echo") < 0)
         goto cleanup;
-    for (s = 0; s < 2; s++) {
-        lat[s] = malloc(per * ROUNDS * sizeof(double));
-        if (!lat[s])
-            goto cleanup;
-    }
-    /* [EMU]: the script's B0h, [REF]: the firmware's 43h. */
-    for (i = 0; i < warm; i++)
-        if (rt_sample(&d.l, req_echo, sizeof req_echo, SCRIPT_ECHO, &dummy) <
-                0 ||
-            rt_sample(&d.l, req_width, sizeof req_width, WSG_CMD_GET_WIDTH,
-                      &dummy) < 0)
-            goto cleanup;
-    for (round = 0; round < ROUNDS; round++) {
-        for (k = 0; k < 2; k++) {
-            s = (round + k) % 2;
-            for (i = 0; i < per; i++)
-                if ((s == EMU
-                         ? rt_sample(&d.l, req_echo, sizeof req_echo,
-                                     SCRIPT_ECHO, &lat[s][n[s]++])
-                         : rt_sample(&d.l, req_width, sizeof req_width,
-                                     WSG_CMD_GET_WIDTH, &lat[s][n[s]++])) < 0)
-                    goto cleanup;
-        }
-    }
-    dd[EMU] = dist_of(lat[EMU], n[EMU]);
-    dd[REF] = dist_of(lat[REF], n[REF]);
+    if (alternate(b, echo_take, NULL, &e, dd) < 0)
+        goto cleanup;
     /* At rest, the connection open as a driver keeps it. */
     sleep_s(0.3);
-    if (ctl_wakes(&d.ctl, &w0) < 0)
+    if (ctl_wakes(&d->ctl, &w0) < 0)
         goto cleanup;
     sleep_s(b->o.idle_s);
-    if (ctl_wakes(&d.ctl, &w1) < 0)
+    if (ctl_wakes(&d->ctl, &w1) < 0)
         goto cleanup;
     wakes = w1 - w0;
     rc = 0;
 cleanup:
-    if (sd_stop(&d) < 0)
+    if (sd_stop(d) < 0)
         rc = -1;
     r = add_row(b, "script B0h round trip median (us)", dd[EMU].p50,
                 dd[REF].p50, 1);
@@ -220,8 +207,6 @@ cleanup:
     add_row(b, "script B0h round trip p99 (us)", dd[EMU].p99, dd[REF].p99, 1);
     r = add_row(b, "script in cmd.read: timer wakes", wakes, NOT_APPLIED, 0);
     set_target(r, T_EQ, 0, 0, "0");
-    for (s = 0; s < 2; s++)
-        free(lat[s]);
     return rc;
 }
 

@@ -51,6 +51,51 @@ struct dist dist_of(double *v, size_t n)
     return d;
 }
 
+int alternate(struct bench *b, int (*take)(void *ctx, int side, double *us),
+              int (*turn)(void *ctx, int side, int on), void *ctx,
+              struct dist dd[2])
+{
+    size_t per = (size_t)(b->o.samples / ROUNDS), warm, i;
+    double *lat[2] = {NULL, NULL}, dummy;
+    size_t n[2] = {0, 0};
+    int round, k, side, rc = -1;
+
+    dd[0].p50 = dd[0].p99 = dd[0].max = NAN;
+    dd[1] = dd[0];
+    if (per == 0)
+        per = 1;
+    warm = per < 200 ? 200 : per > 2000 ? 2000 : per;
+    for (side = 0; side < 2; side++) {
+        lat[side] = malloc(per * ROUNDS * sizeof(double));
+        if (!lat[side])
+            goto out;
+    }
+    for (i = 0; i < warm; i++)
+        if (take(ctx, 0, &dummy) < 0 || take(ctx, 1, &dummy) < 0)
+            goto out;
+    for (round = 0; round < ROUNDS; round++) {
+        for (k = 0; k < 2; k++) {
+            side = (round + k) % 2;
+            if (turn && turn(ctx, side, 1) < 0)
+                goto out;
+            for (i = 0; i < per; i++)
+                if (take(ctx, side, &lat[side][n[side]++]) < 0)
+                    break;
+            if (turn)
+                turn(ctx, side, 0);
+            if (i < per)
+                goto out;
+        }
+    }
+    dd[0] = dist_of(lat[0], n[0]);
+    dd[1] = dist_of(lat[1], n[1]);
+    rc = 0;
+out:
+    free(lat[0]);
+    free(lat[1]);
+    return rc;
+}
+
 struct row *add_row(struct bench *b, const char *label, double emu, double ref,
                     int decimals)
 {

@@ -82,26 +82,54 @@ static void watcher_stop(pid_t pid)
     waitpid(pid, NULL, 0);
 }
 
+/* The two sides: one connection's 43h, with the watcher running while
+ * the watched side's rounds last. */
+struct web_bench {
+    struct link l;
+    struct sockaddr_in web;
+    const char *addr;
+    pid_t watcher;
+};
+
+static int web_take(void *ctx, int side, double *us)
+{
+    (void)side;
+    return sample(&((struct web_bench *)ctx)->l, us);
+}
+
+static int web_turn(void *ctx, int side, int on)
+{
+    struct web_bench *wb = ctx;
+
+    if (side != WEB_WATCHED)
+        return 0;
+    if (!on) {
+        watcher_stop(wb->watcher);
+        wb->watcher = -1;
+        return 0;
+    }
+    wb->watcher = watcher_start(&wb->web, wb->addr);
+    if (wb->watcher < 0) {
+        msg("wsgemu --web: the watcher could not open /events");
+        return -1;
+    }
+    return 0;
+}
+
 int bench_web(struct bench *b)
 {
     char *argv[] = {b->emu_exe, "--tcp",       "127.0.0.1:0",
                     "--web",    "127.0.0.1:0", NULL};
-    size_t per = (size_t)(b->o.samples / ROUNDS), warm, i;
-    double *lat[2] = {NULL, NULL}, dummy;
-    size_t n[2] = {0, 0};
     struct dist dd[2] = {{NAN, NAN, NAN}, {NAN, NAN, NAN}};
-    struct sockaddr_in tcp, web;
+    struct web_bench wb;
+    struct sockaddr_in tcp;
     struct server srv;
-    struct link l;
     char *v = NULL, *w = NULL;
-    pid_t watcher = -1;
-    int round, k, s, started = 0, rc = -1;
+    int started = 0, rc = -1;
     struct row *r;
 
-    link_init(&l, L_TCP, "wsgemu --web");
-    if (per == 0)
-        per = 1;
-    warm = per < 200 ? 200 : per > 2000 ? 2000 : per;
+    link_init(&wb.l, L_TCP, "wsgemu --web");
+    wb.watcher = -1;
     if (server_start(b, &srv, "wsgemu --web", argv, READY_MS) < 0)
         goto cleanup;
     started = 1;
@@ -111,40 +139,14 @@ int bench_web(struct bench *b)
         msg("wsgemu --web: no tcp= or web= in its ready line");
         goto cleanup;
     }
-    if (parse_ipport(v, &tcp) < 0 || parse_ipport(w, &web) < 0 ||
-        link_tcp(&l, &tcp) < 0)
+    wb.addr = w;
+    if (parse_ipport(v, &tcp) < 0 || parse_ipport(w, &wb.web) < 0 ||
+        link_tcp(&wb.l, &tcp) < 0)
         goto cleanup;
-    for (s = 0; s < 2; s++) {
-        lat[s] = malloc(per * ROUNDS * sizeof(double));
-        if (!lat[s])
-            goto cleanup;
-    }
-    for (i = 0; i < warm; i++)
-        if (sample(&l, &dummy) < 0)
-            goto cleanup;
-    for (round = 0; round < ROUNDS; round++) {
-        for (k = 0; k < 2; k++) {
-            s = (round + k) % 2;
-            if (s == WEB_WATCHED) {
-                watcher = watcher_start(&web, w);
-                if (watcher < 0) {
-                    msg("wsgemu --web: the watcher could not open /events");
-                    goto cleanup;
-                }
-            }
-            for (i = 0; i < per; i++)
-                if (sample(&l, &lat[s][n[s]++]) < 0)
-                    goto cleanup;
-            watcher_stop(watcher);
-            watcher = -1;
-        }
-    }
-    dd[WEB_WATCHED] = dist_of(lat[WEB_WATCHED], n[WEB_WATCHED]);
-    dd[WEB_ALONE] = dist_of(lat[WEB_ALONE], n[WEB_ALONE]);
-    rc = 0;
+    rc = alternate(b, web_take, web_turn, &wb, dd);
 cleanup:
-    watcher_stop(watcher);
-    link_close(&l);
+    watcher_stop(wb.watcher);
+    link_close(&wb.l);
     if (started && server_stop(&srv) < 0)
         rc = -1;
     r = add_row(b, "43h median, page watching (us)", dd[WEB_WATCHED].p50,
@@ -154,7 +156,5 @@ cleanup:
             dd[WEB_ALONE].p99, 1);
     free(v);
     free(w);
-    for (s = 0; s < 2; s++)
-        free(lat[s]);
     return rc;
 }

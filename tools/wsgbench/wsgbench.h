@@ -132,6 +132,15 @@ void sleep_s(double s);
 /* ---- statistics, rows and the table (table.c) ---- */
 
 struct dist dist_of(double *v, size_t n);
+/* Two kinds of sample (sides 0 and 1) taken in ROUNDS alternating rounds
+ * of --samples/ROUNDS each, after a warm-up of both, so that the machine's
+ * noise hits both alike: take(ctx, side, &us) takes one (0, or -1
+ * reported); turn(ctx, side, 1) before a side's round and (ctx, side, 0)
+ * after it, if not NULL. Their distributions into dd (NaN when it failed).
+ * 0, or -1. */
+int alternate(struct bench *b, int (*take)(void *ctx, int side, double *us),
+              int (*turn)(void *ctx, int side, int on), void *ctx,
+              struct dist dd[2]);
 struct row *add_row(struct bench *b, const char *label, double emu, double ref,
                     int decimals);
 void set_target(struct row *r, enum target tk, double tv, int on_ratio,
