@@ -22,21 +22,15 @@ src=$2
 artifacts=$3
 shift 3
 
-py=/usr/bin/python3
-for need in /usr/bin/chromium /usr/bin/chromedriver "$py"; do
+for need in /usr/bin/chromium /usr/bin/chromedriver; do
     if [ ! -x "$need" ]; then
         echo "run.sh: skipped: no $need" \
              "(scripts/deps.sh --test installs chromium chromium-driver)"
         exit 77
     fi
 done
-for mod in pytest selenium; do
-    if ! "$py" -c "import $mod" 2>/dev/null; then
-        echo "run.sh: skipped: $py has no module $mod" \
-             "(scripts/deps.sh --test installs python3-pytest python3-selenium)"
-        exit 77
-    fi
-done
+. "$(dirname "$0")/../need_python.sh"
+need_python run.sh "python3-pytest python3-selenium" pytest selenium
 # A build without libmicrohttpd has no page to test (ctest says which).
 if [ "${WSG_HAVE_WEB:-1}" != 1 ]; then
     echo "run.sh: skipped: wsgemu was built without libmicrohttpd"

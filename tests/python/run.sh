@@ -24,19 +24,10 @@ pydir=$2
 venv=$3
 shift 3
 
-py=/usr/bin/python3
-if [ ! -x "$py" ]; then
-    echo "run.sh: skipped: no $py (apt-get install python3)"
-    exit 77
-fi
-for mod in venv ensurepip pytest setuptools wheel; do
-    if ! "$py" -c "import $mod" 2>/dev/null; then
-        echo "run.sh: skipped: $py has no module $mod" \
-             "(scripts/deps.sh --test installs python3-venv python3-pytest" \
-             "python3-setuptools python3-wheel)"
-        exit 77
-    fi
-done
+. "$(dirname "$0")/../need_python.sh"
+need_python run.sh \
+    "python3-venv python3-pytest python3-setuptools python3-wheel" \
+    venv ensurepip pytest setuptools wheel
 
 # Nothing written into the source tree: no bytecode caches, no
 # .pytest_cache.

@@ -19,13 +19,10 @@ if [ $# -ne 2 ]; then
 fi
 src=$1
 work=$2
-py=/usr/bin/python3
-for mod in venv ensurepip pytest setuptools wheel; do
-    if ! "$py" -c "import $mod" 2>/dev/null; then
-        echo "wheel.sh: skipped: $py has no module $mod (scripts/deps.sh --test)"
-        exit 77
-    fi
-done
+. "$(dirname "$0")/../need_python.sh"
+need_python wheel.sh \
+    "python3-venv python3-pytest python3-setuptools python3-wheel" \
+    venv ensurepip pytest setuptools wheel
 export PYTHONDONTWRITEBYTECODE=1 PIP_NO_INPUT=1 PIP_DISABLE_PIP_VERSION_CHECK=1
 
 mkdir -p "$work" || exit 1
