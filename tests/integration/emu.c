@@ -11,6 +11,7 @@
 
 #include "emu.h"
 
+#include <arpa/inet.h>
 #include <errno.h>
 #include <fcntl.h>
 #include <netdb.h>
@@ -538,6 +539,18 @@ static int split_addr(const char *addr, char *host, size_t hcap, char *port,
     host[hl] = '\0';
     strcpy(port, colon + 1);
     return 0;
+}
+
+int emu_ipv4_addr(const char *addr, struct sockaddr_in *sa)
+{
+    char host[128], port[16];
+
+    if (split_addr(addr, host, sizeof host, port, sizeof port) != 0)
+        return -1;
+    memset(sa, 0, sizeof *sa);
+    sa->sin_family = AF_INET;
+    sa->sin_port = htons((uint16_t)atoi(port));
+    return inet_pton(AF_INET, host, &sa->sin_addr) == 1 ? 0 : -1;
 }
 
 static int tcp_open(struct emu_client *c, const char *addr)

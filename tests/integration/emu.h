@@ -251,6 +251,10 @@ int emu_proc_activity(pid_t pid, long *switches, long *ticks);
 
 /* Monotonic milliseconds. */
 double emu_now_ms(void);
+/* "A.B.C.D:PORT", as the ready line's fields give it, as an address. 0,
+ * or -1 when it is not one. */
+struct sockaddr_in;
+int emu_ipv4_addr(const char *addr, struct sockaddr_in *sa);
 void emu_sleep_ms(int ms);
 
 /* Path of the daemon from argv[1]; test_skip-style exit 77 without it. */

@@ -14,18 +14,10 @@ int ctl_open(struct ctl *c, const struct emu *e)
 {
     char v[64];
     struct sockaddr_in sa;
-    const char *colon;
 
     wsg_client_init(&c->link, WSG_LINK_TCP);
-    if (!emu_field(e, "control", v, sizeof v))
+    if (!emu_field(e, "control", v, sizeof v) || emu_ipv4_addr(v, &sa) < 0)
         return -1;
-    colon = strrchr(v, ':');
-    if (!colon)
-        return -1;
-    memset(&sa, 0, sizeof sa);
-    sa.sin_family = AF_INET;
-    sa.sin_port = htons((uint16_t)atoi(colon + 1));
-    sa.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
     return wsg_client_open_tcp(&c->link, &sa, EMU_REPLY_MS) < 0 ? -1 : 0;
 }
 

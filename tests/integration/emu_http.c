@@ -23,18 +23,9 @@
 static int http_connect(const char *addr)
 {
     struct sockaddr_in sa;
-    char host[64];
-    const char *colon = strrchr(addr, ':');
     int fd;
 
-    if (!colon || (size_t)(colon - addr) >= sizeof host)
-        return -1;
-    memcpy(host, addr, (size_t)(colon - addr));
-    host[colon - addr] = '\0';
-    memset(&sa, 0, sizeof sa);
-    sa.sin_family = AF_INET;
-    sa.sin_port = htons((uint16_t)atoi(colon + 1));
-    if (inet_pton(AF_INET, host, &sa.sin_addr) != 1)
+    if (emu_ipv4_addr(addr, &sa) < 0)
         return -1;
     fd = socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
     if (fd < 0)

@@ -62,7 +62,7 @@ struct gcl {
 /* Connect to gripper nth's value of the ready line's tcp= field. */
 static int gcl_open(struct gcl *c, const struct emu *e, unsigned nth)
 {
-    char v[1024], *p, *comma, *colon;
+    char v[1024], *p, *comma;
     struct sockaddr_in sa;
     unsigned i;
 
@@ -78,14 +78,7 @@ static int gcl_open(struct gcl *c, const struct emu *e, unsigned nth)
     comma = strchr(p, ',');
     if (comma)
         *comma = '\0';
-    colon = strrchr(p, ':');
-    if (!colon)
-        return -1;
-    *colon = '\0';
-    memset(&sa, 0, sizeof sa);
-    sa.sin_family = AF_INET;
-    sa.sin_port = htons((uint16_t)atoi(colon + 1));
-    if (inet_pton(AF_INET, p, &sa.sin_addr) != 1)
+    if (emu_ipv4_addr(p, &sa) < 0)
         return -1;
     /* TCP_NODELAY, as the clients set it (wsg_client_open_tcp). */
     return wsg_client_open_tcp(&c->link, &sa, EMU_REPLY_MS) < 0 ? -1 : 0;
