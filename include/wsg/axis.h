@@ -282,6 +282,10 @@ void wsg_axis_set_part(struct wsg_axis *ax, double width, double stiffness);
 /* A rigid obstacle that blocks the fingers at width, moving either way;
  * width < 0 removes it. */
 void wsg_axis_set_obstacle(struct wsg_axis *ax, double width);
+/* Whether the last grasp that found no part was blocked before its part's
+ * window (1: a collision, GCL's ERR 29) rather than closing through its
+ * clamping travel (0: no part, ERR 18). Both end 25h with E_CMD_FAILED. */
+int wsg_axis_grasp_collided(const struct wsg_axis *ax);
 /* The obstacle's width: 1, or 0 when there is none. */
 int wsg_axis_obstacle(const struct wsg_axis *ax, double *width);
 /* Inject or clear faults (WSG_FAULTS bits). A temperature, power or

@@ -102,9 +102,6 @@ struct wsg_gcl {
     const struct wsg_gcl_command *cur;
     uint8_t cur_id;
     int answered;
-    /* The last GRIP's window, to tell a collision from no part. */
-    double grip_nominal, grip_tolerance;
-    int grip_closing;
 };
 
 /* Set up g for session s of d: s's format hook now writes text. */

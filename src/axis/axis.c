@@ -550,6 +550,7 @@ static void wsg_axis_blocked(struct wsg_axis *ax)
         } else { /* blocked before the part's window: not the part */
             ax->stats.no_part++;
             ax->grasp_state = WSG_GS_NO_PART;
+            ax->grasp_collided = 1;
             wsg_axis_block_release(ax, dir);
             wsg_axis_done(ax, &m, WSG_E_CMD_FAILED);
         }
@@ -586,6 +587,7 @@ static void wsg_axis_arrived(struct wsg_axis *ax)
         ax->stats.total++;
         ax->stats.no_part++;
         ax->grasp_state = WSG_GS_NO_PART;
+        ax->grasp_collided = 0;
         wsg_axis_done(ax, &m, WSG_E_CMD_FAILED);
         break;
     default:
@@ -1179,6 +1181,11 @@ int wsg_axis_part(const struct wsg_axis *ax, double *width, double *stiffness)
     *width = ax->part_width;
     *stiffness = ax->part_stiffness;
     return 1;
+}
+
+int wsg_axis_grasp_collided(const struct wsg_axis *ax)
+{
+    return ax->grasp_collided;
 }
 
 int wsg_axis_obstacle(const struct wsg_axis *ax, double *width)

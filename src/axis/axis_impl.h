@@ -57,6 +57,9 @@ struct wsg_axis {
     int fast_stop;
     uint32_t event_flags; /* AXIS_STOPPED, TARGET_POS_REACHED, BLOCKED_* */
     enum wsg_grasp_state grasp_state;
+    /* The last grasp failed blocked before its part's window (a
+     * collision), not through its clamping travel (no part). */
+    int grasp_collided;
     struct wsg_grasp_stats stats;
     struct wsg_motion motion;
     int clamping;        /* motor pushes against a block */

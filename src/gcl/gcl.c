@@ -300,10 +300,6 @@ static void run_grip(struct wsg_gcl *g, const struct wsg_gcl_command *k,
     }
     /* As the model takes it: a width beyond the stroke is the stroke. */
     width = width < 0 ? 0 : width > cfg->stroke ? cfg->stroke : width;
-    g->grip_nominal = width;
-    g->grip_tolerance =
-        win.tolerance >= 0 ? win.tolerance : cfg->width_tolerance;
-    g->grip_closing = width <= wsg_axis_width(ax);
     st = wsg_axis_request_grasp_in(ax, width, gcl_speed(g, c, 2), &win,
                                    g->s->tag);
     if (st == WSG_E_CMD_PENDING)
@@ -487,15 +483,12 @@ static const char *gcl_motion_name(uint8_t id)
 }
 
 /* A GRIP that failed: blocked before its window is a collision
- * (E_AXIS_BLOCKED), through its clamping travel no part (E_CMD_FAILED). */
+ * (E_AXIS_BLOCKED), through its clamping travel no part (E_CMD_FAILED),
+ * as the model tells them apart. */
 static uint16_t gcl_grip_status(const struct wsg_gcl *g, uint16_t status)
 {
-    double w = wsg_axis_width(wsg_device_axis_const(g->dev));
-
-    if (status != WSG_E_CMD_FAILED)
-        return status;
-    if (g->grip_closing ? w > g->grip_nominal + g->grip_tolerance + 1e-6
-                        : w < g->grip_nominal - g->grip_tolerance - 1e-6)
+    if (status == WSG_E_CMD_FAILED &&
+        wsg_axis_grasp_collided(wsg_device_axis_const(g->dev)))
         return WSG_E_AXIS_BLOCKED;
     return status;
 }
