@@ -19,6 +19,7 @@
 #ifndef WSG_GCL_H
 #define WSG_GCL_H
 
+#include <stdarg.h>
 #include <stddef.h>
 #include <stdint.h>
 
@@ -51,6 +52,12 @@ void wsg_gcl_line_init(struct wsg_gcl_line *l);
 /* Consume bytes up to and including the next newline. Returns the bytes
  * consumed; *ev tells what ended there, *line and *n the line for
  * WSG_GCL_LINE (valid until the next call). An empty line is no event. */
+/* One answer line from a format into buf (cap bytes, at least 2): the
+ * text, cut to fit, and its newline. Returns its length with the
+ * newline, 0 on a format error. The GCL interpreter's lines and the
+ * control channel's answers are made so. No NUL is written after it. */
+size_t wsg_gcl_line_vformat(char *buf, size_t cap, const char *fmt,
+                            va_list ap);
 size_t wsg_gcl_line_feed(struct wsg_gcl_line *l, const uint8_t *data,
                          size_t len, enum wsg_gcl_event *ev, const char **line,
                          size_t *n);

@@ -37,6 +37,7 @@
 #include "gripper.h"
 #include "peer.h"
 #include "state.h"
+#include "wsg/gcl.h"
 
 #define WSG_CTL_READ_CHUNK 1024u
 #define WSG_CTL_REPLY_MAX  2048u
@@ -78,19 +79,15 @@ static void reply(struct ctl_ctx *c, const char *fmt, ...)
 {
     char buf[WSG_CTL_REPLY_MAX];
     va_list ap;
-    int n;
+    size_t n;
 
     if (c->s->closed)
         return;
     va_start(ap, fmt);
-    n = vsnprintf(buf, sizeof buf - 1, fmt, ap);
+    n = wsg_gcl_line_vformat(buf, sizeof buf, fmt, ap);
     va_end(ap);
-    if (n < 0)
-        return;
-    if ((size_t)n > sizeof buf - 2)
-        n = (int)(sizeof buf - 2);
-    buf[n++] = '\n';
-    c->s->answer(c->s->ctx, buf, (size_t)n);
+    if (n)
+        c->s->answer(c->s->ctx, buf, n);
 }
 
 /* A command that changed the world answers "ok WHAT" and puts WHAT in the

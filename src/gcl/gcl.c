@@ -47,17 +47,13 @@ static void gcl_line(struct wsg_gcl *g, const char *fmt, ...)
 {
     char buf[WSG_GCL_OUT_MAX];
     va_list ap;
-    int n;
+    size_t n;
 
     va_start(ap, fmt);
-    n = vsnprintf(buf, sizeof buf - 1, fmt, ap);
+    n = wsg_gcl_line_vformat(buf, sizeof buf, fmt, ap);
     va_end(ap);
-    if (n < 0)
-        return;
-    if ((size_t)n > sizeof buf - 2)
-        n = (int)(sizeof buf - 2);
-    buf[n++] = '\n';
-    wsg_device_send(g->dev, g->s, (const uint8_t *)buf, (size_t)n);
+    if (n)
+        wsg_device_send(g->dev, g->s, (const uint8_t *)buf, n);
 }
 
 /* "ERR MOVE 16", with VERBOSE=1 "ERR MOVE 16 E_ACCESS_DENIED". */

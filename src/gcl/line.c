@@ -9,6 +9,7 @@
 #include <ctype.h>
 #include <errno.h>
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -203,4 +204,16 @@ int wsg_gcl_parse(const char *line, size_t n, struct wsg_gcl_cmd *c)
         return -1;
     }
     return skip_blanks(p, end) == end ? 0 : -1;
+}
+
+size_t wsg_gcl_line_vformat(char *buf, size_t cap, const char *fmt, va_list ap)
+{
+    int n = vsnprintf(buf, cap - 1, fmt, ap);
+
+    if (n < 0)
+        return 0;
+    if ((size_t)n > cap - 2)
+        n = (int)(cap - 2);
+    buf[n++] = '\n';
+    return (size_t)n;
 }
