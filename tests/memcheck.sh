@@ -27,9 +27,9 @@ shift 2
 # slower; these were checked to pass under it, each in under 50 s, most of
 # it the quiet windows, ten times as long here). Left
 # out: integ_hostile (it bounds the daemon's RSS, which under valgrind is
-# valgrind's own; and it floods the daemon against deadlines), the `can`
-# test (it runs in a VM without valgrind), scenarios (a shell script that
-# starts the daemon itself, not through spawn()).
+# valgrind's own; and it floods the daemon against deadlines) and the `can`
+# test (it runs in a VM without valgrind). scenarios is the shell script
+# tests/scenarios/scenarios.sh, in lockstep, run with wsgctl ($WSGCTL).
 if [ $# = 0 ]; then
     set -- \
         integ_basic:tcp integ_basic:udp integ_basic:pty \
@@ -43,7 +43,7 @@ if [ $# = 0 ]; then
         integ_script:lifecycle integ_script:sandbox integ_script:lockstep \
         integ_script:startup \
         integ_gcl:commands integ_gcl:framing integ_gcl:rules \
-        integ_gcl:fleet integ_gcl:log
+        integ_gcl:fleet integ_gcl:log scenarios
 fi
 
 if ! command -v valgrind >/dev/null 2>&1; then
@@ -68,7 +68,13 @@ for t in "$@"; do
     t0=$(date +%s)
     # shellcheck disable=SC2086 # no transport: no argument
     # A bound on a hang only: a loaded machine may take twice as long.
-    timeout -k 5 300 "$DIR/$name" "$EXE" $tp </dev/null || st=$?
+    if [ "$name" = scenarios ]; then
+        timeout -k 5 300 bash "$(dirname "$0")/scenarios/scenarios.sh" \
+            "$EXE" "${WSGCTL:?WSGCTL: wsgctl for the scenarios}" \
+            </dev/null || st=$?
+    else
+        timeout -k 5 300 "$DIR/$name" "$EXE" $tp </dev/null || st=$?
+    fi
     echo "--- $name${tp:+ $tp}: status $st, $(($(date +%s) - t0)) s"
     case $st in
     0) passed=$((passed + 1)) ;;

@@ -40,6 +40,11 @@
  *   through --control, each seen in the channel's state; the channel's
  *   refusals (exit 1) and usage errors (exit 2), and none without
  *   --control or WSG_CONTROL;
+ * - --step MS in lockstep: with time paused, a motion accepted and its
+ *   result after exactly MS ms of simulated time (from WSG_CONTROL), a
+ *   refusal at once with nothing stepped; without --step a paused motion
+ *   is said to be accepted with no result (exit 3); --step without
+ *   WSG_CONTROL, with a bad value or with --control is exit 2;
  * - --opt=value, WSG_HOST, WSG_PORT and WSG_CONTROL set for the child,
  *   the command line winning over them;
  * - --json objects of readings, actions, failures (the gripper's status,
@@ -639,6 +644,60 @@ static void test_channel(struct env *v, struct emu *e)
     ctl_close(&k);
 }
 
+/* --step: a motion in lockstep, time advanced by exactly what was asked
+ * from the moment the gripper accepted it, whatever wsgctl's own speed. */
+static void test_step(struct env *v, struct emu *e)
+{
+    char addr[64];
+    struct ctl k;
+    long long t0;
+
+    REQUIRE(emu_field(e, "control", addr, sizeof addr) != NULL);
+    REQUIRE(ctl_open(&k, e) == 0);
+    CMD_OK(&k, "time pause");
+    t0 = ctl_time_us(ctl_cmd(&k, "time"));
+    REQUIRE(t0 >= 0);
+
+    /* No control channel to step with: a usage error, nothing sent. */
+    unsetenv("WSG_CONTROL");
+    CHECK_EQ(TCP(v, "--step", "2000", "move", "70", "100"), 2);
+    CHECK(has(v->err, "--step needs") && has(v->err, "WSG_CONTROL"));
+    setenv("WSG_CONTROL", addr, 1);
+    CHECK_EQ(TCP(v, "--step", "0", "move", "70", "100"), 2);
+    CHECK(has(v->err, "--step: milliseconds"));
+    CHECK_EQ(ctl(v, "--control", addr, "--step", "10", "time", (char *)NULL),
+             2);
+    CHECK_EQ(ctl_time_us(ctl_cmd(&k, "time")), t0);
+
+    /* 110 to 70 mm at 100 mm/s ends well within 2 s: its result, 2 s of
+     * simulated time later, to the microsecond. */
+    CHECK_EQ(TCP(v, "--step", "2000", "move", "70", "100"), 0);
+    CHECK_EQ(ctl_time_us(ctl_cmd(&k, "time")), t0 + 2000000LL);
+    CHECK_EQ(TCP(v, "-q", "width"), 0);
+    CHECK(!strcmp(v->out, "70.00\n"));
+    /* A grasp with no part: its failure, after the same exact step. */
+    CHECK_EQ(TCP(v, "--step", "3000", "grasp", "20", "50"), 1);
+    CHECK(has(v->err, "E_CMD_FAILED"));
+    CHECK_EQ(ctl_time_us(ctl_cmd(&k, "time")), t0 + 5000000LL);
+    /* Refused at once (FAST STOP): no step at all. */
+    CHECK_EQ(TCP(v, "fast-stop"), 0);
+    CHECK_EQ(TCP(v, "--step", "2000", "move", "60", "100"), 1);
+    CHECK(has(v->err, "E_ACCESS_DENIED"));
+    CHECK_EQ(ctl_time_us(ctl_cmd(&k, "time")), t0 + 5000000LL);
+    CHECK_EQ(TCP(v, "ack"), 0);
+    unsetenv("WSG_CONTROL");
+
+    /* Without --step, a paused motion is accepted and its result never
+     * comes: said as such, not as a gripper that did not answer. */
+    CHECK_EQ(TCP(v, "--timeout", "0.5", "move", "60", "100"), 3);
+    CHECK(has(v->err, "accepted (E_CMD_PENDING), but no final result"));
+    CHECK(has(v->err, "--step"));
+    CHECK_EQ(ctl_time_us(ctl_cmd(&k, "time")), t0 + 5000000LL);
+    CMD_OK(&k, "time resume");
+    CHECK_EQ(TCP(v, "home"), 0); /* back at 110 mm for what follows */
+    ctl_close(&k);
+}
+
 /* --opt=value for options with a value, none for those without; the
  * gripper's address from WSG_HOST and WSG_PORT, the channel's from
  * WSG_CONTROL, each only when the line names no interface. */
@@ -1009,6 +1068,7 @@ int main(int argc, char **argv)
     test_control_read(&v, &e);
     test_script(&v, &e);
     test_channel(&v, &e);
+    test_step(&v, &e);
     test_options_env(&v, &e);
     test_json(&v, &e);
     test_wait_ready(&v, exe, &e);

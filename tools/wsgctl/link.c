@@ -198,10 +198,36 @@ uint64_t timeout_deadline(const struct opts *o)
     return wsg_client_deadline((int)(o->timeout_s * 1000.0));
 }
 
+/* --step: the motion was accepted, with the emulator's time paused;
+ * advance it by exactly the time asked for, through a connection of its
+ * own to the control channel ("time step" answers once the steps ran and
+ * what they sent, the final result too, has left). 0 or an exit status
+ * (said). */
+static int step_time(const struct opts *o)
+{
+    struct ctx k;
+    char cmd[48], line[256];
+    const char *rest;
+    int rc;
+
+    memset(&k, 0, sizeof k);
+    k.o = *o;
+    k.o.kind = LINK_CONTROL;
+    k.o.addr = o->step_control;
+    k.o.jo = NULL;
+    rc = conn_open(&k.c, &k.o);
+    if (rc < 0)
+        return -rc;
+    snprintf(cmd, sizeof cmd, "time step %lu", o->step_ms);
+    rc = control_line(&k, cmd, line, sizeof line, &rest);
+    conn_close(&k.c);
+    return rc;
+}
+
 /* Send a request and wait for its answer, through E_CMD_PENDING for the
- * final result (on_pending, if given, sees the immediate reply). Frames
- * with other IDs (streams) are skipped. 0 with *r filled, or an exit
- * status. */
+ * final result (on_pending, if given, sees the immediate reply; --step
+ * steps the emulator's time then). Frames with other IDs (streams) are
+ * skipped. 0 with *r filled, or an exit status. */
 int xact(struct ctx *x, uint8_t id, const uint8_t *payload, size_t len,
          struct wsg_client_frame *r, pending_fn on_pending)
 {
@@ -214,7 +240,22 @@ int xact(struct ctx *x, uint8_t id, const uint8_t *payload, size_t len,
     if (rc == 1 && r->status == WSG_E_CMD_PENDING) {
         if (on_pending)
             on_pending(&x->o, r);
+        if (x->o.step_ms) {
+            int st = step_time(&x->o);
+
+            if (st)
+                return st;
+        }
         rc = conn_result(&x->c, wsg_client_final(&x->c.l, r, deadline));
+        if (rc == 0) {
+            /* Accepted, but the result never came: the usual reason is
+             * an emulator whose time is paused. */
+            err("%02Xh %s: accepted (E_CMD_PENDING), but no final result "
+                "within %.1f s (with the emulator's time paused it comes "
+                "only when time is stepped: --step MS)",
+                id, wsg_cmd_name(id) ? wsg_cmd_name(id) : "?", x->o.timeout_s);
+            return EXIT_CONN;
+        }
     }
     if (rc == 1 && x->o.jo) {
         x->o.jo->has_status = 1;

@@ -288,6 +288,14 @@ static void usage(FILE *f)
             "  --timeout S            wait for an answer (through "
             "E_CMD_PENDING) up to S\n"
             "                         seconds, default 10\n"
+            "  --step MS              lockstep with the emulator's time "
+            "paused: once the\n"
+            "                         gripper accepts a motion "
+            "(E_CMD_PENDING), advance\n"
+            "                         simulated time by exactly MS ms "
+            "through the control\n"
+            "                         channel ($WSG_CONTROL), then wait "
+            "for the result\n"
             "  --force N              with --text, grasp's force: "
             "GRIP(N, ...)\n"
             "  -q, --quiet            bare values for scripts, one answer "
@@ -369,7 +377,8 @@ enum opt_id {
     O_CONTROL,
     O_TIMEOUT,
     O_COUNT,
-    O_FORCE
+    O_FORCE,
+    O_STEP
 };
 
 /* Every option, and whether it takes a value ("--timeout 5" or
@@ -387,7 +396,7 @@ static const struct {
     {"tcp", 0, 1, O_TCP},           {"udp", 0, 1, O_UDP},
     {"serial", 0, 1, O_SERIAL},     {"control", 0, 1, O_CONTROL},
     {"timeout", 0, 1, O_TIMEOUT},   {"count", 0, 1, O_COUNT},
-    {"force", 0, 1, O_FORCE},
+    {"force", 0, 1, O_FORCE},       {"step", 0, 1, O_STEP},
 };
 #define NOPTIONS (sizeof options / sizeof options[0])
 
@@ -448,6 +457,16 @@ static int set_option(struct opts *o, enum opt_id id, const char *val)
         }
         o->force = d;
         o->has_force = 1;
+        break;
+    case O_STEP:
+        /* The channel's own bound on one "time step" (an hour). */
+        if (parse_ulong(val, 3600000ul, &n) < 0 || n == 0) {
+            err("--step: milliseconds of simulated time (1..3600000), not "
+                "\"%s\"",
+                val);
+            return EXIT_USAGE;
+        }
+        o->step_ms = n;
         break;
     case O_HELP:
     case O_VERSION:
@@ -639,6 +658,11 @@ static int check_command(const struct ctx *x, const struct command *cmd,
             cmd->name);
         return EXIT_USAGE;
     }
+    if (x->o.step_ms && (x->o.text || x->o.kind == LINK_CONTROL)) {
+        err("--step steps time for a command of the binary protocol sent "
+            "to the gripper (not --text, not --control)");
+        return EXIT_USAGE;
+    }
     if (x->o.jo && (cmd->run == c_decode || x->o.text)) {
         err("--json: decode and the commands of --text print the "
             "protocol's own text");
@@ -690,6 +714,14 @@ int main(int argc, char **argv)
     rc = cmd ? env_defaults(&x, cmd, tcp_addr, sizeof tcp_addr) : EXIT_USAGE;
     if (!rc)
         rc = check_command(&x, cmd, npos - 1);
+    if (!rc && x.o.step_ms) {
+        x.o.step_control = getenv("WSG_CONTROL");
+        if (!x.o.step_control || !x.o.step_control[0]) {
+            err("--step needs the emulator's control channel in "
+                "WSG_CONTROL (HOST:PORT)");
+            rc = EXIT_USAGE;
+        }
+    }
     if (rc)
         goto out;
 

@@ -61,9 +61,11 @@ struct opts {
     long count; /* watch: stop after this many values; 0: until SIGINT */
     int text;   /* --text: GCL lines instead of binary packets (text.c) */
     int has_force;
-    double force;    /* --force N: GCL's GRIP(force, ...) */
-    int probe;       /* wait-ready: a failure to connect is retried, unsaid */
-    struct jout *jo; /* --json: where the values go; NULL without */
+    double force; /* --force N: GCL's GRIP(force, ...) */
+    int probe;    /* wait-ready: a failure to connect is retried, unsaid */
+    unsigned long step_ms;    /* --step: simulated ms after E_CMD_PENDING */
+    const char *step_control; /* --step: the control channel (WSG_CONTROL) */
+    struct jout *jo;          /* --json: where the values go; NULL without */
 };
 
 /* The link to the gripper, and whether its close was announced. */
