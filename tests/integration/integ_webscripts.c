@@ -185,8 +185,9 @@ static void test_names(void)
         "/scripts/.lua",
         "/scripts/",
         "/scripts/a%20b.lua",
-        "/scripts/"
-        "a123456789012345678901234567890123456789012345678901234567890.lua",
+        /* A name over the limit (one literal, split across lines). */
+        ("/scripts/"
+         "a123456789012345678901234567890123456789012345678901234567890.lua"),
     };
     char path[512], link[512], parent_x[512];
     size_t i;

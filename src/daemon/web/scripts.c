@@ -147,7 +147,7 @@ enum MHD_Result wsg_web_serve_scripts(struct wsg_web *web,
 {
     struct script_entry *list = NULL;
     size_t n = 0, more = 0, i, cap, used = 0;
-    char why[128], *json = NULL, dir_esc[2 * PATH_MAX];
+    char why[512], *json = NULL, dir_esc[2 * PATH_MAX];
     enum MHD_Result ret = MHD_NO;
     struct dirent *de;
     struct stat st;
