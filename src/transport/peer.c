@@ -140,9 +140,10 @@ static void wsg_peer_sent(struct wsg_peer *p, int r)
     if (r == -ENOBUFS) {
         p->reset = p->set->cfg.reset_on_overflow;
         wsg_peer_kill(p, "output queue over 64 KiB (client not reading)");
-    } else if (r < 0)
-        wsg_peer_kill(p, wsg_peer_gone(p->set, -r) ? NULL : strerror(-r));
-    else if (r)
+    } else if (r < 0) {
+        p->gone = wsg_peer_gone(p->set, -r);
+        wsg_peer_kill(p, p->gone ? NULL : strerror(-r));
+    } else if (r)
         wsg_peer_set_events(p, p->events | EPOLLOUT);
     else
         wsg_peer_set_events(p, p->events & ~(uint32_t)EPOLLOUT);

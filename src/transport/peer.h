@@ -42,6 +42,10 @@ struct wsg_peer {
     int dead;
     /* Dropped for not reading: closed with a reset (see wsg_peer_free). */
     int reset;
+    /* Ended by the other side (a hang-up, a reset, a send refused because
+     * it has gone): what it sent before may still wait unread in the
+     * socket, for the owner's closed() to take. */
+    int gone;
     uint32_t events; /* as registered with epoll */
     char name[WSG_PEER_NAME_LEN];
     struct wsg_outq out; /* last: its buffer needs no initial value */
@@ -78,7 +82,7 @@ struct wsg_peer_config {
      * the batch. */
     void (*defer)(void *ctx);
     /* Optional. A peer is about to be freed (reaped, or the set closed):
-     * marked dead, its descriptor still open. */
+     * marked dead, its descriptor still open (and readable: see gone). */
     void (*closed)(struct wsg_peer *p, void *ctx);
     void *ctx;
 };

@@ -26,7 +26,10 @@
  * event batch, because the device may be in the middle of a call that sends
  * to it and later events of the batch may name it; the reap after the batch
  * then reports it to the device (the FAST STOP rule) and frees it. A client
- * dropped for not reading is reset rather than sent a FIN (peer.c says why).
+ * that went away (hang-up or reset) may have sent bytes that were not read
+ * yet, a 07h above all: they are read and processed before the report
+ * (conn_drain). A client dropped for not reading is reset rather than sent
+ * a FIN (peer.c says why).
  *
  * With --text-interface every connection speaks GCL (wsg/gcl.h) instead:
  * its bytes go to the interpreter, which answers with lines through the
@@ -117,6 +120,15 @@ static void conn_packet(struct wsg_session *s, const uint8_t *pkt, size_t len)
     wsg_peer_send(&c->peer, pkt, len);
 }
 
+/* Bytes from the client: to the interpreter or the device. */
+static void conn_feed(struct wsg_tcp_conn *c, const uint8_t *buf, size_t n)
+{
+    if (c->text)
+        wsg_gcl_input(&c->gcl, buf, n);
+    else
+        wsg_device_input(c->tcp->dev, &c->session, &c->parser, buf, n);
+}
+
 static void conn_read(struct wsg_tcp_conn *c)
 {
     uint8_t buf[WSG_TCP_READ_CHUNK];
@@ -128,16 +140,13 @@ static void conn_read(struct wsg_tcp_conn *c)
         ssize_t n = recv(c->peer.watch.fd, buf, sizeof buf, MSG_DONTWAIT);
 
         if (n > 0) {
-            if (c->text)
-                wsg_gcl_input(&c->gcl, buf, (size_t)n);
-            else
-                wsg_device_input(c->tcp->dev, &c->session, &c->parser, buf,
-                                 (size_t)n);
+            conn_feed(c, buf, (size_t)n);
             if ((size_t)n < sizeof buf)
                 return;
             continue;
         }
         if (n == 0) {
+            c->peer.gone = 1;
             wsg_peer_kill(&c->peer, NULL);
             return;
         }
@@ -145,10 +154,34 @@ static void conn_read(struct wsg_tcp_conn *c)
             continue;
         if (errno == EAGAIN || errno == EWOULDBLOCK)
             return;
-        wsg_peer_kill(&c->peer, errno == ECONNRESET || errno == ETIMEDOUT
-                                    ? NULL
-                                    : strerror(errno));
+        c->peer.gone = errno == ECONNRESET || errno == ETIMEDOUT;
+        wsg_peer_kill(&c->peer, c->peer.gone ? NULL : strerror(errno));
         return;
+    }
+}
+
+/* The client has gone, and what it sent last may not have been read yet:
+ * a client that sends 07h and closes while stream packets are unread
+ * resets the connection, and a stream's send can meet that reset before
+ * the 07h is read. Linux keeps the bytes that came before a reset or a
+ * hang-up readable, so they are taken now, before the close is reported:
+ * everything that arrived before the end is processed as it would have
+ * been (an announced close is no link loss). Its answers go nowhere: the
+ * peer is dead. Bounded like one read event. */
+static void conn_drain(struct wsg_tcp_conn *c)
+{
+    uint8_t buf[WSG_TCP_READ_CHUNK];
+    int i;
+
+    for (i = 0; i < WSG_TCP_READS_PER_EVENT; i++) {
+        ssize_t n = recv(c->peer.watch.fd, buf, sizeof buf, MSG_DONTWAIT);
+
+        if (n > 0)
+            conn_feed(c, buf, (size_t)n);
+        else if (n < 0 && errno == EINTR)
+            continue;
+        if (n < (ssize_t)sizeof buf)
+            return;
     }
 }
 
@@ -160,8 +193,11 @@ static void conn_closed(struct wsg_peer *p, void *ctx)
     struct wsg_tcp *tcp = ctx;
     struct wsg_tcp_conn *c = conn_of(p);
 
-    if (!c->reported)
+    if (!c->reported) {
+        if (p->gone)
+            conn_drain(c);
         wsg_device_session_closed(tcp->dev, &c->session);
+    }
     tcp->refused = 0;
 }
 

@@ -10,6 +10,10 @@
  * - 07h answers E_SUCCESS (with a parameter: E_NO_PARAM_EXPECTED), aborts a
  *   running motion, every later command on that connection is
  *   E_ACCESS_DENIED, and its close causes no FAST STOP;
+ * - a client that sends 07h and closes at once while stream packets are
+ *   still unread (its close resets the connection) causes no FAST STOP,
+ *   30 times in a row: what arrived before the reset is processed before
+ *   the close, also when a stream's send meets the reset first;
  * - with --no-disconnect-fast-stop no close causes FAST STOP, while 23h
  *   still does.
  *
@@ -228,6 +232,29 @@ static void test_announce(struct emu *e, struct emu_client *m, int window)
              WSG_E_SUCCESS);
 }
 
+/* The way a driver deactivates: 07h and close, without reading the
+ * stream packets that are still coming (1 ms 43h), so the close resets the
+ * connection while the 07h waits in the gripper's socket. FAST STOP is
+ * sticky: one close taken for a link loss shows at the end. */
+static void test_announce_unread(struct emu *e, struct emu_client *m,
+                                 int window)
+{
+    static const uint8_t every_ms[3] = {0x01, 0x01, 0x00};
+    struct emu_client a;
+    int i;
+
+    for (i = 0; i < 30; i++) {
+        REQUIRE(emu_open(&a, e, tp) == 0);
+        REQUIRE(emu_send(&a, WSG_CMD_GET_WIDTH, every_ms, 3) == 0);
+        emu_sleep_ms(5 + i % 5); /* packets pile up, unread */
+        REQUIRE(emu_send(&a, WSG_CMD_DISCONNECT, NULL, 0) == 0);
+        emu_close(&a);
+        emu_sleep_ms(i % 3);
+    }
+    CHECK(!fast_stop_within(m, window));
+    CHECK_EQ(flags_of(m) & WSG_SF_FAST_STOP, 0);
+}
+
 static void test_no_disconnect_fast_stop(const char *exe, int window)
 {
     static const char *const args[] = {"--no-disconnect-fast-stop", NULL};
@@ -335,6 +362,7 @@ int main(int argc, char **argv)
     if (window > emu_ms(3000))
         window = emu_ms(3000);
     test_announce(&e, &m, window);
+    test_announce_unread(&e, &m, window);
     CHECK_EQ(m.link.bad, 0);
     announce_and_close(&m);
     ctl_close(&k);
