@@ -950,7 +950,8 @@ static void test_speed_ramp(void)
     wsg_axis_settle(&ax);
     CHECK_EQ(wsg_axis_speed_mode(&ax), 1);
     CHECK(wsg_axis_flags(&ax) & WSG_SF_MOVING);
-    CHECK_EQ(wsg_axis_grasp_state(&ax), WSG_GS_POSITIONING);
+    /* The controller's own motion: no grasping state. */
+    CHECK_EQ(wsg_axis_grasp_state(&ax), WSG_GS_IDLE);
     CHECK(wsg_axis_busy(&ax));
     CHECK(!wsg_axis_idle(&ax));
     bare_steps(&ax, 1);
@@ -995,7 +996,8 @@ static void test_speed_ramp(void)
     CHECK(wsg_axis_idle(&ax));
     CHECK_EQ(wsg_axis_speed_mode(&ax), 1);
     CHECK(wsg_axis_busy(&ax));
-    CHECK_EQ(wsg_axis_grasp_state(&ax), WSG_GS_POSITIONING);
+    /* The controller's own motion: no grasping state. */
+    CHECK_EQ(wsg_axis_grasp_state(&ax), WSG_GS_IDLE);
     w = wsg_axis_width(&ax);
     bare_steps(&ax, 100);
     CHECK_EQ(wsg_axis_width(&ax), w);
@@ -1055,7 +1057,8 @@ static void test_speed_block(void)
     CHECK_EQ(wsg_axis_speed(&ax), 0.0);
     CHECK_EQ(wsg_axis_flags(&ax), WSG_SF_REFERENCED | WSG_SF_BLOCKED_MINUS);
     CHECK_EQ(wsg_axis_speed_mode(&ax), 1);
-    CHECK_EQ(wsg_axis_grasp_state(&ax), WSG_GS_POSITIONING);
+    /* The controller's own motion: no grasping state. */
+    CHECK_EQ(wsg_axis_grasp_state(&ax), WSG_GS_IDLE);
     CHECK(wsg_axis_idle(&ax));
     bare_steps(&ax, 100);
     CHECK_NEAR(wsg_axis_width(&ax), 36.0, 1e-9);
@@ -1193,7 +1196,8 @@ static void test_speed_replace(void)
     wsg_axis_settle(&ax);
     CHECK_EQ(r.n, 5);
     CHECK_EQ(wsg_axis_pressing(&ax), 1);
-    CHECK_EQ(wsg_axis_grasp_state(&ax), WSG_GS_POSITIONING);
+    /* The grasping state as the grasp left it. */
+    CHECK_EQ(wsg_axis_grasp_state(&ax), WSG_GS_HOLDING);
     CHECK_NEAR(wsg_axis_width(&ax), 40.0 - 40.0 / 50.0, 1e-9);
     CHECK_NEAR(wsg_axis_force(&ax), 40.0, 1e-9);
     CHECK_EQ(wsg_axis_flags(&ax), WSG_SF_REFERENCED | WSG_SF_BLOCKED_MINUS);
@@ -1301,7 +1305,8 @@ static void test_speed_host(void)
     wsg_axis_settle(ax);
     tdev_steps(&t, 100);
     CHECK_EQ(tdev_flags(&t), WSG_SF_REFERENCED | WSG_SF_MOVING);
-    CHECK_EQ(tdev_grasp_state(&t), WSG_GS_POSITIONING);
+    /* The controller's own motion: no grasping state. */
+    CHECK_EQ(tdev_grasp_state(&t), WSG_GS_IDLE);
     CHECK_NEAR(tdev_getf(&t, WSG_CMD_GET_SPEED), -80.0, 1e-3);
     CHECK_NEAR(tdev_getf(&t, WSG_CMD_GET_WIDTH), wsg_axis_width(ax), 1e-3);
     CHECK_EQ(tdev_move(&t, 0, 90.0f, 100.0f), WSG_E_ALREADY_RUNNING);

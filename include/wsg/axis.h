@@ -259,6 +259,12 @@ uint16_t wsg_axis_request_release(struct wsg_axis *ax, double width,
  * command set). Returns E_INVALID_PARAMETER for NaN, else E_SUCCESS: the
  * caller checks FAST STOP, faults and the reference as for any motion. */
 uint16_t wsg_axis_request_speed(struct wsg_axis *ax, double v, uint32_t tag);
+/* The move just requested is the motion controller's own (a script's
+ * mc.move), not the grasping state machine's: the grasping state (41h)
+ * stays what it was while it runs and when it ends, as on the gripper,
+ * where only the grasping commands (25h, 26h, 21h and a script's grasping
+ * functions) drive it. Speed mode is always the controller's own. */
+void wsg_axis_request_own(struct wsg_axis *ax);
 void wsg_axis_request_stop(struct wsg_axis *ax);
 void wsg_axis_request_fast_stop(struct wsg_axis *ax);
 void wsg_axis_request_ack(struct wsg_axis *ax);

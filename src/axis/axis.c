@@ -463,9 +463,10 @@ static void wsg_axis_start(struct wsg_axis *ax, const struct wsg_motion *m)
         return;
     ax->event_flags &= ~(WSG_SF_AXIS_STOPPED | WSG_SF_TARGET_POS_REACHED |
                          WSG_SF_BLOCKED_MINUS | WSG_SF_BLOCKED_PLUS);
-    switch (m->kind) {
+    switch (m->own ? WSG_MOTION_SPEED : m->kind) {
+    case WSG_MOTION_SPEED: /* the controller's own: not a grasping state */
+        break;
     case WSG_MOTION_MOVE:
-    case WSG_MOTION_SPEED:
         ax->grasp_state = WSG_GS_POSITIONING;
         break;
     case WSG_MOTION_GRASP:
@@ -532,7 +533,8 @@ static void wsg_axis_blocked(struct wsg_axis *ax)
         break;
     }
     case WSG_MOTION_MOVE:
-        ax->grasp_state = WSG_GS_IDLE;
+        if (!m.own)
+            ax->grasp_state = WSG_GS_IDLE;
         if (m.move_flags & WSG_MOVE_STOP_ON_BLOCK)
             wsg_axis_block_release(ax, dir);
         else
@@ -578,7 +580,8 @@ static void wsg_axis_arrived(struct wsg_axis *ax)
     switch (m.kind) {
     case WSG_MOTION_MOVE:
     case WSG_MOTION_RELEASE:
-        ax->grasp_state = WSG_GS_IDLE;
+        if (!m.own)
+            ax->grasp_state = WSG_GS_IDLE;
         ax->event_flags |= WSG_SF_TARGET_POS_REACHED;
         wsg_axis_done(ax, &m, WSG_E_SUCCESS);
         break;
@@ -1327,6 +1330,11 @@ uint16_t wsg_axis_request_speed(struct wsg_axis *ax, double v, uint32_t tag)
     wsg_axis_request(ax, WSG_MOTION_SPEED, 0, 0.0, wsg_clamp(v, -vmax, vmax),
                      tag);
     return WSG_E_SUCCESS;
+}
+
+void wsg_axis_request_own(struct wsg_axis *ax)
+{
+    ax->req_motion.own = 1;
 }
 
 /* A motion accepted in this step but not started owes an E_CMD_ABORTED. */

@@ -40,6 +40,9 @@ struct wsg_motion {
     double tolerance; /* grasp: the part width tolerance it is judged by */
     double speed;
     uint8_t move_flags; /* preposition flags */
+    /* The motion controller's own (wsg_axis_request_own): leaves the
+     * grasping state as it is. */
+    int own;
     struct wsg_profile prof;
 };
 

@@ -445,6 +445,9 @@ static int mc_move(lua_State *L)
             api_axis(L),
             (uint8_t)(flags & (WSG_MOVE_RELATIVE | WSG_MOVE_STOP_ON_BLOCK)), w,
             v, 0);
+    /* The motion controller's, not the grasping state machine's. */
+    if (st == WSG_E_CMD_PENDING)
+        wsg_axis_request_own(api_axis(L));
     return api_motion(L, st);
 }
 

@@ -24,7 +24,7 @@
  *   while the script sleeps are read in order, and one past the queue is
  *   E_OVERRUN; after "script stop" the IDs are E_CMD_UNKNOWN again;
  * - speed: speed mode from a script: mc.speed(-20) closes at 20 mm/s
- *   (43h/44h/40h, 41h POSITIONING), blocked by a part it pushes with the
+ *   (43h/44h/40h; 41h stays IDLE), blocked by a part it pushes with the
  *   force limit (45h, mc.blocked()); mc.stop, FAST STOP, a host's Stop
  *   and the script's end stop it, a new mc.speed replaces it; a host's
  *   motion is refused meanwhile, and one of the host's is replaced by the
@@ -559,13 +559,17 @@ static void api_motion(struct emu_client *c, struct ctl *k)
     CHECK_NEAR(float_of(c, WSG_CMD_GET_WIDTH), 110.0, 1e-3);
     expect_readings(c, "false");
 
-    /* mc.move, absolute then relative (flag 1) */
+    /* mc.move, absolute then relative (flag 1). The motion controller's
+     * own motion: a driver polling 41h sees IDLE while the script moves
+     * the fingers and after (only grasping commands drive that state). */
     op_status(c, OP_MOVE, (const float[]){30, 50}, 2, 0, WSG_E_SUCCESS);
     CMD_OK(k, "time step 100");
     CHECK(flags_of(c) & WSG_SF_MOVING);
+    CHECK_EQ(emu_get_grasp_state(c), WSG_GS_IDLE);
     expect_readings(c, "true");
     CMD_OK(k, "time step 3000");
     CHECK_NEAR(float_of(c, WSG_CMD_GET_WIDTH), 30.0, 1e-3);
+    CHECK_EQ(emu_get_grasp_state(c), WSG_GS_IDLE);
     op_status(c, OP_MOVE, (const float[]){-10, 50}, 2, 1, WSG_E_SUCCESS);
     CMD_OK(k, "time step 3000");
     CHECK_NEAR(float_of(c, WSG_CMD_GET_WIDTH), 20.0, 1e-3);
@@ -622,8 +626,11 @@ static void api_motion(struct emu_client *c, struct ctl *k)
      * holding, pressing with the limit it set */
     op_status(c, OP_GRASP_MOVE, (const float[]){70, 100}, 2, -1,
               WSG_E_SUCCESS);
+    /* The grasping state machine's prepositioning, as 21h's. */
+    CHECK_EQ(emu_get_grasp_state(c), WSG_GS_POSITIONING);
     CMD_OK(k, "time step 3000");
     CHECK_NEAR(float_of(c, WSG_CMD_GET_WIDTH), 70.0, 1e-3);
+    CHECK_EQ(emu_get_grasp_state(c), WSG_GS_IDLE);
     CMD_OK(k, "part 40");
     op_status(c, OP_GRASP, (const float[]){40, 50, 25}, 3, -1, WSG_E_SUCCESS);
     readings(c, t, sizeof t);
@@ -1045,12 +1052,14 @@ static void part_speed(const char *exe)
     CHECK_NEAR(float_of(&c, WSG_CMD_GET_WIDTH), 110.0, 1e-3);
     op(&c, OP_FORCE, (const float[]){30}, 1, -1, t, sizeof t);
 
-    /* Closing at 20 mm/s towards a part at 40 mm: moving, positioning, a
-     * speed of -20 from the first step on (the maximum acceleration). */
+    /* Closing at 20 mm/s towards a part at 40 mm: moving, a speed of -20
+     * from the first step on (the maximum acceleration); the grasping
+     * state stays IDLE: speed mode is the motion controller's, not the
+     * grasping state machine's. */
     CMD_OK(&k, "part 40");
     op_status(&c, OP_SPEED, (const float[]){-20}, 1, -1, WSG_E_SUCCESS);
     CHECK(flags_of(&c) & WSG_SF_MOVING);
-    CHECK_EQ(emu_get_grasp_state(&c), WSG_GS_POSITIONING);
+    CHECK_EQ(emu_get_grasp_state(&c), WSG_GS_IDLE);
     /* Started, but only the steps move the fingers. */
     readings(&c, t, sizeof t);
     CHECK_STR(field(t, R_BUSY), "true");
