@@ -51,6 +51,7 @@
 #include "assets.h"
 #include "gripper.h"
 #include "state.h"
+#include "web_sse.h"
 #include "wsg/schema.h"
 
 #define NS_PER_S  1000000000ull
@@ -65,8 +66,14 @@
  * resumed streams end. */
 #define WEB_RUN_ROUNDS 4
 #define WEB_INFO_MAX   1536u
-/* "id: " and a 64-bit number with its newline. */
-#define WEB_ID_MAX 26u
+
+/* A subscriber's buffer takes a whole state event and any log event
+ * (C99 has no _Static_assert: an array of negative size fails the
+ * build). */
+typedef char
+    web_state_event_fits[WSG_WEB_EVENT_MAX <= WSG_WEB_LOG_EVENT_MAX ? 1 : -1];
+typedef char
+    web_log_event_fits[WSG_WEB_SSE_LOG_MIN <= WSG_WEB_LOG_EVENT_MAX ? 1 : -1];
 
 /* One client of /events. It sends its own copy of an event, so a newer
  * one can be made while it is half sent; a slow client skips to the
@@ -225,66 +232,20 @@ static void on_hup(struct wsg_watch *w, uint32_t events)
     web_run(sub->web);
 }
 
-static size_t put_bytes(char *buf, size_t used, const char *p, size_t n)
-{
-    memcpy(buf + used, p, n);
-    return used + n;
-}
-
 /* The next "log" event for sub: the lines it has not had, as many whole
- * ones as fit, each a "data:" line. A client that fell behind the ring
- * starts again at its oldest whole line, told how much it missed. */
+ * ones as fit, packed by web_sse.c (bounded by the buffer, whatever the
+ * lines are). 0: nothing to send. */
 static size_t log_event(struct wsg_web *web, struct web_sub *sub)
 {
-    static const char head[] = "event: log\n";
-    const uint64_t oldest = web->log_head > WSG_WEB_LOG_RING
-                                ? web->log_head - WSG_WEB_LOG_RING
-                                : 0;
-    const size_t cap = sizeof sub->buf;
-    size_t used = put_bytes(sub->buf, 0, head, sizeof head - 1);
-    char note[64];
-    int n;
+    struct wsg_web_ring ring;
 
-    if (sub->log_off < oldest) {
-        n = snprintf(note, sizeof note, "data: (%llu bytes of log missed)\n",
-                     (unsigned long long)(oldest - sub->log_off));
-        used = put_bytes(sub->buf, used, note, (size_t)n);
-        sub->log_off = oldest;
-        /* The ring's oldest byte may be inside a line. */
-        while (sub->log_off < web->log_pushed &&
-               web->log_ring[sub->log_off++ % WSG_WEB_LOG_RING] != '\n')
-            ;
-    }
-    while (sub->log_off < web->log_pushed) {
-        uint64_t end = sub->log_off;
-        size_t len, room;
-
-        while (end < web->log_pushed &&
-               web->log_ring[end % WSG_WEB_LOG_RING] != '\n')
-            end++;
-        len = (size_t)(end - sub->log_off);
-        /* "data: ", the line, its newline, the id line and the event's
-         * blank line. */
-        room = cap - used - 8 - WEB_ID_MAX;
-        if (len > room) {
-            if (used > sizeof head - 1)
-                break;  /* the next event takes it */
-            len = room; /* a line longer than an event: cut */
-        }
-        used = put_bytes(sub->buf, used, "data: ", 6);
-        while (len--)
-            sub->buf[used++] =
-                web->log_ring[sub->log_off++ % WSG_WEB_LOG_RING];
-        sub->buf[used++] = '\n';
-        sub->log_off = end + 1;
-    }
-    /* The offset as the event's id: a browser that reconnects sends it
-     * back (Last-Event-ID) and goes on where it was. */
-    n = snprintf(sub->buf + used, WEB_ID_MAX, "id: %llu\n",
-                 (unsigned long long)sub->log_off);
-    used += (size_t)n;
-    sub->buf[used++] = '\n';
-    return used;
+    ring.buf = web->log_ring;
+    ring.size = WSG_WEB_LOG_RING;
+    ring.oldest = web->log_head > WSG_WEB_LOG_RING
+                      ? web->log_head - WSG_WEB_LOG_RING
+                      : 0;
+    ring.end = web->log_pushed;
+    return wsg_web_sse_log(sub->buf, sizeof sub->buf, &ring, &sub->log_off);
 }
 
 void wsg_web_log_line(struct wsg_web *web, const char *line, size_t len)
@@ -316,18 +277,22 @@ static ssize_t sub_read(void *cls, uint64_t pos, char *buf, size_t max)
         return MHD_CONTENT_READER_END_OF_STREAM;
     if (sub->off == sub->len) {
         if (sub->seq != web->seq) {
-            memcpy(sub->buf, web->event, web->event_len);
-            sub->len = web->event_len;
+            /* It fits (web_state_event_fits); bounded all the same. */
+            sub->len = web->event_len < sizeof sub->buf ? web->event_len
+                                                        : sizeof sub->buf;
+            memcpy(sub->buf, web->event, sub->len);
             sub->seq = web->seq;
-        } else if (sub->log_off < web->log_pushed) {
-            sub->len = log_event(web, sub);
         } else {
+            sub->len =
+                sub->log_off < web->log_pushed ? log_event(web, sub) : 0;
+        }
+        sub->off = 0;
+        if (sub->len == 0) {
             /* Returning 0 has MHD ask again at its next run: suspended,
              * it does not run for this connection until resumed. */
             sub_suspend(sub);
             return 0;
         }
-        sub->off = 0;
     }
     n = sub->len - sub->off < max ? sub->len - sub->off : max;
     memcpy(buf, sub->buf + sub->off, n);
