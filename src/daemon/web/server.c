@@ -827,7 +827,7 @@ static enum MHD_Result on_field(void *cls, enum MHD_ValueKind kind,
     if (off > 0 && req->nfields &&
         strcmp(req->fields[req->nfields - 1].name, key) == 0)
         f = &req->fields[req->nfields - 1];
-    else if (req->nfields < WSG_WEB_FIELDS_MAX &&
+    else if (off == 0 && req->nfields < WSG_WEB_FIELDS_MAX &&
              strlen(key) < WSG_WEB_NAME_MAX)
         f = &req->fields[req->nfields++];
     else {
@@ -836,7 +836,9 @@ static enum MHD_Result on_field(void *cls, enum MHD_ValueKind kind,
     }
     if (off == 0)
         strcpy(f->name, key);
-    if (off + size >= WSG_WEB_VALUE_MAX) {
+    /* Its end and its NUL within the value, without a sum that could
+     * wrap. */
+    if (off >= WSG_WEB_VALUE_MAX || size >= WSG_WEB_VALUE_MAX - off) {
         req->overfull = 1;
         return MHD_YES;
     }
@@ -915,8 +917,8 @@ static enum MHD_Result on_body(struct wsg_web_req *req, const char *data,
     char *p;
 
     if (req->refused)
-        return MHD_YES; /* the rest of a refused body: dropped */
-    if (req->body_len + n > max)
+        return MHD_YES;          /* the rest of a refused body: dropped */
+    if (n > max - req->body_len) /* body_len <= max: no wrap */
         return too_large(req);
     if (req->body_len + n + 1 > req->body_cap) {
         size_t cap = req->body_cap ? req->body_cap * 2 : 1024;
