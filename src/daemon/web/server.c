@@ -51,6 +51,7 @@
 #include "assets.h"
 #include "gripper.h"
 #include "state.h"
+#include "web_host.h"
 #include "web_sse.h"
 #include "wsg/schema.h"
 
@@ -765,49 +766,34 @@ static enum wsg_web_method method_of(const char *m)
     return 0;
 }
 
-/* A request that changes something from another site's page (its Origin
- * is not this server) is refused: a page anywhere must not stop the
- * gripper through the browser of someone who has this one open. Clients
- * that are not browsers send no Origin. */
-static int foreign_origin(struct MHD_Connection *conn)
+/* The request's Host names this server (web_host.h): a site that points
+ * its own name at the address (DNS rebinding) must not get its pages
+ * into the origin of this one, which could then read and drive the
+ * gripper. Whatever the address it listens on. */
+static int foreign_host(const struct wsg_web *web, struct MHD_Connection *conn)
+{
+    const char *host = MHD_lookup_connection_value(conn, MHD_HEADER_KIND,
+                                                   MHD_HTTP_HEADER_HOST);
+
+    return !wsg_web_host_allowed(host, web->d->opt.web_hosts,
+                                 web->d->opt.web.addr);
+}
+
+/* A request that changes something from another page than this server's
+ * own (its Origin is not http:// and this request's Host) is refused: a
+ * page anywhere must not stop the gripper through the browser of someone
+ * who has this one open. Clients that are not browsers send no Origin. */
+static int foreign_origin(const struct wsg_web *web,
+                          struct MHD_Connection *conn)
 {
     const char *origin, *host;
 
     origin = MHD_lookup_connection_value(conn, MHD_HEADER_KIND,
                                          MHD_HTTP_HEADER_ORIGIN);
-    if (!origin)
-        return 0;
     host = MHD_lookup_connection_value(conn, MHD_HEADER_KIND,
                                        MHD_HTTP_HEADER_HOST);
-    return !host || strncmp(origin, "http://", 7) != 0 ||
-           strcmp(origin + 7, host) != 0;
-}
-
-/* Served on loopback, only a loopback name in the Host header is taken:
- * a name of another site that resolves to 127.0.0.1 (DNS rebinding)
- * would otherwise let that site's pages read and drive the gripper. */
-static int foreign_host(const struct wsg_web *web, struct MHD_Connection *conn)
-{
-    static const char *const names[] = {"localhost", "127.", "[::1]",
-                                        "[::ffff:127."};
-    const char *host;
-    size_t i, n;
-
-    if (!web->loopback)
-        return 0;
-    host = MHD_lookup_connection_value(conn, MHD_HEADER_KIND,
-                                       MHD_HTTP_HEADER_HOST);
-    if (!host)
-        return 0; /* HTTP/1.0: MHD takes it; no browser sends it */
-    for (i = 0; i < sizeof names / sizeof names[0]; i++) {
-        n = strlen(names[i]);
-        if (strncmp(host, names[i], n) != 0)
-            continue;
-        /* "localhost" and "[::1]" end there or at their port. */
-        if (names[i][n - 1] == '.' || host[n] == '\0' || host[n] == ':')
-            return 0;
-    }
-    return 1;
+    return !wsg_web_origin_allowed(origin, host, web->d->opt.web_hosts,
+                                   web->d->opt.web.addr);
 }
 
 /* A form's fields, as MHD's post processor decodes them. */
@@ -889,16 +875,21 @@ static enum MHD_Result on_headers(struct wsg_web *web, struct wsg_web_req *req)
     if (foreign_host(web, req->conn)) {
         req->refused = 1;
         return wsg_web_error(req->conn, MHD_HTTP_MISDIRECTED_REQUEST,
-                             "this server answers to its loopback address "
-                             "only");
+                             "Host is not a name of this server: it answers "
+                             "to localhost, 127.x.x.x, [::1], the address "
+                             "it listens on and the names given with "
+                             "--web-host");
     }
     if (!(req->route->methods & req->method)) {
         req->refused = 1;
         return refuse_method(req->conn, req->route->methods);
     }
-    if (req->method != WSG_WEB_GET && foreign_origin(req->conn)) {
+    if (req->method != WSG_WEB_GET && foreign_origin(web, req->conn)) {
         req->refused = 1;
-        return wsg_web_error(req->conn, MHD_HTTP_FORBIDDEN, "foreign origin");
+        return wsg_web_error(req->conn, MHD_HTTP_FORBIDDEN,
+                             "foreign origin: a change is taken from this "
+                             "server's own page (Origin http:// and its "
+                             "Host) or from a client that sends no Origin");
     }
     max = req->route->body_max ? req->route->body_max : WSG_WEB_BODY_MAX;
     clen = MHD_lookup_connection_value(req->conn, MHD_HEADER_KIND,
@@ -1078,7 +1069,6 @@ int wsg_web_open(struct wsg_web **out, struct wsg_daemon *d, char *err,
     web->g = &d->sched.grippers[0];
     web->mhd_watch.fd = -1;
     web->timer.fd = -1;
-    web->loopback = ep->addr[0] == 127;
     r = wsg_web_world_open(web);
     if (r < 0) {
         snprintf(err, errlen, "cannot serve the web page: %s", strerror(-r));
