@@ -14,8 +14,9 @@
 
 #include "options.h"
 
-#include "delay.h" /* the latencies it takes */
-#include "sched.h" /* the time scales it runs */
+#include "delay.h"    /* the latencies it takes */
+#include "sched.h"    /* the time scales it runs */
+#include "web_host.h" /* the names --web-host takes */
 #include "wsg/device.h"
 
 #include <arpa/inet.h>
@@ -335,6 +336,52 @@ static int set_homing(struct wsg_options *o, const struct wsg_setting *s,
     return 0;
 }
 
+/* NAME[,NAME...]: host names the web page answers to, added to those
+ * given before (--web-host again, the config file's). Each is checked as
+ * a browser would send it in Host (web_host.h): a mistyped one would
+ * only lock the page out, so it is an error now, not a refusal later. */
+static int set_web_host(struct wsg_options *o, const struct wsg_setting *s,
+                        const char *val, unsigned line, char *err,
+                        size_t errcap)
+{
+    char *list = field(o, s->at);
+    size_t used = strlen(list);
+    const char *p = val, *end;
+
+    (void)line;
+    for (;;) {
+        size_t n, i;
+
+        while (*p == ' ')
+            p++;
+        end = strchr(p, ',');
+        n = end ? (size_t)(end - p) : strlen(p);
+        while (n > 0 && p[n - 1] == ' ')
+            n--;
+        if (wsg_web_host_name_valid(p, n) < 0) {
+            snprintf(err, errcap,
+                     "'%.*s' is not a host name (letters, digits, '-' and "
+                     "'.'), an IPv4 address or an [IPv6] address, without "
+                     "a port",
+                     (int)(n < 80 ? n : 80), p);
+            return -EINVAL;
+        }
+        if (used + (used > 0) + n + 1 > WSG_WEB_HOSTS_MAX) {
+            snprintf(err, errcap, "too many names (%u characters at most)",
+                     WSG_WEB_HOSTS_MAX - 1);
+            return -EINVAL;
+        }
+        if (used > 0)
+            list[used++] = ',';
+        for (i = 0; i < n; i++)
+            list[used++] = (char)tolower((unsigned char)p[i]);
+        list[used] = '\0';
+        if (!end)
+            return 0;
+        p = end + 1;
+    }
+}
+
 /* What Set Device Tag (51h) would accept: min..max printable characters. */
 static int set_tag(struct wsg_options *o, const struct wsg_setting *s,
                    const char *val, unsigned line, char *err, size_t errcap)
@@ -521,6 +568,17 @@ static const struct wsg_setting settings[] = {
      .arg = "[ADDR:]PORT",
      .help = "the gripper's web page (HTTP,\n"
              "default address 127.0.0.1)"},
+    /* DNS rebinding: a page answers only to the names it was given. */
+    {.name = "web-host",
+     .type = WSG_SETTING_PARSE,
+     .parse = set_web_host,
+     .at = WSG_AT(web_hosts),
+     .section = WSG_SECTION_INTERFACES,
+     .arg = "NAME[,NAME...]",
+     .help = "a name the web page answers to\n"
+             "(its Host) besides localhost,\n"
+             "127.x.x.x, [::1] and its address;\n"
+             "given again, adds (default none)"},
     {.name = "model",
      .type = WSG_SETTING_TEXT,
      .at = WSG_AT(model),

@@ -39,6 +39,8 @@
 #define WSG_GRIPPERS_MAX 10000u
 /* Room for a pty path with a fleet's number counted into it. */
 #define WSG_OPTIONS_PATH_MAX 4096u
+/* Room for the names --web-host lists, comma-separated. */
+#define WSG_WEB_HOSTS_MAX 1024u
 
 /* A setting whose valid range depends on the model, which may be named
  * after it: checked against the model's range once the whole command line
@@ -102,6 +104,9 @@ struct wsg_options {
 
     char strbuf[WSG_OPTIONS_STRBUF];
     size_t strbuf_used;
+    /* --web-host: the names the web page answers to besides the loopback
+     * ones, comma-separated, in lower case; "" none. */
+    char web_hosts[WSG_WEB_HOSTS_MAX];
 };
 
 /* What a setting's text is and what becomes of it. */

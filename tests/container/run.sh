@@ -165,12 +165,14 @@ talk() {
     'ok {"width":110.000,'*) ;;
     *) fail "control state: $out" ;;
     esac
-    # The web page on port 80: its state as JSON.
+    # The web page on port 80: its state as JSON. It answers only to its
+    # own names in Host (a loopback one here), a request without one
+    # neither.
     [ "${WEB:-}" = 1 ] || return 0
     # shellcheck disable=SC2016 # expanded by the inner bash
     out=$(timeout 30 nsenter --net="/proc/$pid/ns/net" bash -c '
         exec 5<>/dev/tcp/127.0.0.1/80 &&
-        printf "GET /state.json HTTP/1.0\r\n\r\n" >&5 &&
+        printf "GET /state.json HTTP/1.0\r\nHost: 127.0.0.1\r\n\r\n" >&5 &&
         timeout 10 cat <&5') || fail "no answer from the web page"
     echo "  web:     $(head -1 <<<"$out" | tr -d '\r')"
     case $out in

@@ -159,18 +159,79 @@ static int is_chunked(const char *head)
            strcasecmp(v, "chunked") == 0;
 }
 
+/* Send req (len bytes) and then body (NULL: none) to addr, read the
+ * answer to its end and parse it into a; what names the request in
+ * messages. 0, or -1 with a message. */
+static int exchange(const char *addr, const char *req, size_t len_req,
+                    const char *body, const char *what, struct http_answer *a,
+                    int timeout_ms)
+{
+    static char buf[HTTP_HEAD_MAX + 2 * HTTP_BODY_MAX];
+    double deadline = emu_now_ms() + timeout_ms;
+    size_t len = 0, hlen, blen;
+    char *he;
+    int fd, eof = 0;
+
+    memset(a, 0, sizeof *a);
+    fd = http_connect(addr);
+    if (fd < 0)
+        return -1;
+    if (send_all(fd, req, len_req) < 0 ||
+        (body && send_all(fd, body, strlen(body)) < 0)) {
+        fprintf(stderr, "http: %s: send failed\n", what);
+        close(fd);
+        return -1;
+    }
+    for (;;) {
+        long r = read_some(fd, buf + len, sizeof buf - 1 - len, deadline);
+
+        if (r == 0)
+            break;
+        if (r < 0) {
+            fprintf(stderr, "http: %s: %s\n", what,
+                    r == -1 ? "timeout" : "read failed");
+            close(fd);
+            return -1;
+        }
+        len += (size_t)r;
+    }
+    close(fd);
+    buf[len] = '\0';
+    he = head_end(buf, len);
+    if (!he || sscanf(buf, "HTTP/1.%*d %d", &a->status) != 1) {
+        fprintf(stderr, "http: %s: no HTTP answer\n", what);
+        return -1;
+    }
+    hlen = (size_t)(he - buf);
+    if (hlen >= sizeof a->head)
+        return -1;
+    memcpy(a->head, buf, hlen);
+    a->head[hlen] = '\0';
+    blen = len - hlen;
+    if (is_chunked(a->head)) {
+        if (dechunk(he, &blen, a->body, &a->body_len, sizeof a->body, &eof) <
+                0 ||
+            !eof) {
+            fprintf(stderr, "http: %s: bad chunked body\n", what);
+            return -1;
+        }
+    } else {
+        if (blen >= sizeof a->body)
+            return -1;
+        memcpy(a->body, he, blen);
+        a->body_len = blen;
+    }
+    a->body[a->body_len] = '\0';
+    return 0;
+}
+
 int http_request(const char *addr, const char *method, const char *path,
                  const char *headers, const char *body, struct http_answer *a,
                  int timeout_ms)
 {
-    static char buf[HTTP_HEAD_MAX + 2 * HTTP_BODY_MAX];
-    char req[HTTP_HEAD_MAX];
-    double deadline = emu_now_ms() + timeout_ms;
-    size_t len = 0, hlen, blen;
-    char *he;
-    int fd, n, eof = 0;
+    char req[HTTP_HEAD_MAX], what[128];
+    int n;
 
-    memset(a, 0, sizeof *a);
     /* headers may name the Host themselves (a test of the Host check). */
     n = snprintf(
         req, sizeof req, "%s %s HTTP/1.1\r\n%s%s%sConnection: close\r\n%s",
@@ -185,56 +246,15 @@ int http_request(const char *addr, const char *method, const char *path,
     n += snprintf(req + n, sizeof req - (size_t)n, "\r\n");
     if (n < 0 || (size_t)n >= sizeof req)
         return -1;
-    fd = http_connect(addr);
-    if (fd < 0)
-        return -1;
-    if (send_all(fd, req, (size_t)n) < 0 ||
-        (body && send_all(fd, body, strlen(body)) < 0)) {
-        fprintf(stderr, "http: %s %s: send failed\n", method, path);
-        close(fd);
-        return -1;
-    }
-    for (;;) {
-        long r = read_some(fd, buf + len, sizeof buf - 1 - len, deadline);
+    snprintf(what, sizeof what, "%s %s", method, path);
+    return exchange(addr, req, (size_t)n, body, what, a, timeout_ms);
+}
 
-        if (r == 0)
-            break;
-        if (r < 0) {
-            fprintf(stderr, "http: %s %s: %s\n", method, path,
-                    r == -1 ? "timeout" : "read failed");
-            close(fd);
-            return -1;
-        }
-        len += (size_t)r;
-    }
-    close(fd);
-    buf[len] = '\0';
-    he = head_end(buf, len);
-    if (!he || sscanf(buf, "HTTP/1.%*d %d", &a->status) != 1) {
-        fprintf(stderr, "http: %s %s: no HTTP answer\n", method, path);
-        return -1;
-    }
-    hlen = (size_t)(he - buf);
-    if (hlen >= sizeof a->head)
-        return -1;
-    memcpy(a->head, buf, hlen);
-    a->head[hlen] = '\0';
-    blen = len - hlen;
-    if (is_chunked(a->head)) {
-        if (dechunk(he, &blen, a->body, &a->body_len, sizeof a->body, &eof) <
-                0 ||
-            !eof) {
-            fprintf(stderr, "http: %s %s: bad chunked body\n", method, path);
-            return -1;
-        }
-    } else {
-        if (blen >= sizeof a->body)
-            return -1;
-        memcpy(a->body, he, blen);
-        a->body_len = blen;
-    }
-    a->body[a->body_len] = '\0';
-    return 0;
+int http_request_raw(const char *addr, const char *req, struct http_answer *a,
+                     int timeout_ms)
+{
+    return exchange(addr, req, strlen(req), NULL, "raw request", a,
+                    timeout_ms);
 }
 
 int http_stream_open(struct http_stream *s, const char *addr, const char *path,
@@ -335,13 +355,14 @@ static int stream_decode(struct http_stream *s)
     return 0;
 }
 
-int http_stream_event(struct http_stream *s, char *name, size_t name_cap,
-                      char *data, size_t data_cap, int timeout_ms)
+/* Wait up to timeout_ms for a whole event in s->text: 1 (its length, up
+ * to the blank line that ends it, in *len), 0 none in time, -1 the stream
+ * ended or failed. */
+static int stream_next(struct http_stream *s, size_t *len, int timeout_ms)
 {
     double deadline = emu_now_ms() + timeout_ms;
 
     for (;;) {
-        char id[32];
         char *end;
         long r;
 
@@ -350,17 +371,7 @@ int http_stream_event(struct http_stream *s, char *name, size_t name_cap,
             return -1;
         end = memmem(s->text, s->text_len, "\n\n", 2);
         if (end) {
-            size_t len = (size_t)(end - s->text);
-
-            event_field(s->text, len, "event", name, name_cap);
-            event_field(s->text, len, "data", data, data_cap);
-            /* An event without an id keeps the last one (as browsers
-             * do). */
-            event_field(s->text, len, "id", id, sizeof id);
-            if (id[0])
-                memcpy(s->id, id, sizeof id);
-            memmove(s->text, end + 2, s->text_len - len - 2);
-            s->text_len -= len + 2;
+            *len = (size_t)(end - s->text);
             return 1;
         }
         if (s->eof)
@@ -374,6 +385,54 @@ int http_stream_event(struct http_stream *s, char *name, size_t name_cap,
         else
             s->raw_len += (size_t)r;
     }
+}
+
+/* Drop the event of len bytes (and its blank line) that stream_next
+ * found. */
+static void stream_take(struct http_stream *s, size_t len)
+{
+    memmove(s->text, s->text + len + 2, s->text_len - len - 2);
+    s->text_len -= len + 2;
+}
+
+int http_stream_event(struct http_stream *s, char *name, size_t name_cap,
+                      char *data, size_t data_cap, int timeout_ms)
+{
+    char id[32];
+    size_t len;
+    int r = stream_next(s, &len, timeout_ms);
+
+    if (r != 1)
+        return r;
+    event_field(s->text, len, "event", name, name_cap);
+    event_field(s->text, len, "data", data, data_cap);
+    /* An event without an id keeps the last one (as browsers do). */
+    event_field(s->text, len, "id", id, sizeof id);
+    if (id[0])
+        memcpy(s->id, id, sizeof id);
+    stream_take(s, len);
+    return 1;
+}
+
+int http_stream_raw(struct http_stream *s, char *buf, size_t cap, size_t *len,
+                    int timeout_ms)
+{
+    size_t n;
+    int r = stream_next(s, &n, timeout_ms);
+
+    if (r != 1)
+        return r;
+    if (n + 2 > cap) {
+        fprintf(stderr, "http: an event of %zu bytes, more than %zu\n", n + 1,
+                cap - 1);
+        return -1;
+    }
+    /* Its lines, the last one's newline included. */
+    memcpy(buf, s->text, n + 1);
+    buf[n + 1] = '\0';
+    *len = n + 1;
+    stream_take(s, n);
+    return 1;
 }
 
 void http_stream_close(struct http_stream *s)

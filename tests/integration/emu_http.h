@@ -27,6 +27,11 @@ struct http_answer {
 int http_request(const char *addr, const char *method, const char *path,
                  const char *headers, const char *body, struct http_answer *a,
                  int timeout_ms);
+/* req sent to addr as it is (a request line and headers of the test's
+ * own, e.g. HTTP/1.0 without a Host), the answer read to its end. 0, or
+ * -1 with a message on stderr. */
+int http_request_raw(const char *addr, const char *req, struct http_answer *a,
+                     int timeout_ms);
 /* The value of header name in a (case-insensitive name) into buf; NULL
  * when absent. */
 const char *http_header(const struct http_answer *a, const char *name,
@@ -58,6 +63,13 @@ int http_stream_open_with(struct http_stream *s, const char *addr,
  * timeout_ms, -1: the stream ended or failed. */
 int http_stream_event(struct http_stream *s, char *name, size_t name_cap,
                       char *data, size_t data_cap, int timeout_ms);
+/* The next whole event as it came: its lines, each with its newline,
+ * without the blank line that ends it, into buf (NUL-terminated), its
+ * length into len. Nothing of it is interpreted (s->id stays). 1: one,
+ * 0: none within timeout_ms, -1: the stream ended or failed, or the event
+ * does not fit in cap - 1 bytes. */
+int http_stream_raw(struct http_stream *s, char *buf, size_t cap, size_t *len,
+                    int timeout_ms);
 void http_stream_close(struct http_stream *s);
 
 /* n connections to addr at once, each with a GET path sent before any

@@ -46,7 +46,6 @@ struct wsg_web {
     int hooked;                 /* the after-batch hook is added */
     int in_run;                 /* inside MHD_run */
     int kicked;                 /* a connection resumed: MHD must run */
-    int loopback;               /* listening on a loopback address */
     char local[WSG_ADDR_LEN];
     /* CLOCK_MONOTONIC deadlines, 0 for none: MHD wants to run by mhd_due
      * (a connection's timeout, or work it left for the next round), a

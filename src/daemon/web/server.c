@@ -51,6 +51,8 @@
 #include "assets.h"
 #include "gripper.h"
 #include "state.h"
+#include "web_host.h"
+#include "web_sse.h"
 #include "wsg/schema.h"
 
 #define NS_PER_S  1000000000ull
@@ -65,8 +67,14 @@
  * resumed streams end. */
 #define WEB_RUN_ROUNDS 4
 #define WEB_INFO_MAX   1536u
-/* "id: " and a 64-bit number with its newline. */
-#define WEB_ID_MAX 26u
+
+/* A subscriber's buffer takes a whole state event and any log event
+ * (C99 has no _Static_assert: an array of negative size fails the
+ * build). */
+typedef char
+    web_state_event_fits[WSG_WEB_EVENT_MAX <= WSG_WEB_LOG_EVENT_MAX ? 1 : -1];
+typedef char
+    web_log_event_fits[WSG_WEB_SSE_LOG_MIN <= WSG_WEB_LOG_EVENT_MAX ? 1 : -1];
 
 /* One client of /events. It sends its own copy of an event, so a newer
  * one can be made while it is half sent; a slow client skips to the
@@ -225,66 +233,20 @@ static void on_hup(struct wsg_watch *w, uint32_t events)
     web_run(sub->web);
 }
 
-static size_t put_bytes(char *buf, size_t used, const char *p, size_t n)
-{
-    memcpy(buf + used, p, n);
-    return used + n;
-}
-
 /* The next "log" event for sub: the lines it has not had, as many whole
- * ones as fit, each a "data:" line. A client that fell behind the ring
- * starts again at its oldest whole line, told how much it missed. */
+ * ones as fit, packed by web_sse.c (bounded by the buffer, whatever the
+ * lines are). 0: nothing to send. */
 static size_t log_event(struct wsg_web *web, struct web_sub *sub)
 {
-    static const char head[] = "event: log\n";
-    const uint64_t oldest = web->log_head > WSG_WEB_LOG_RING
-                                ? web->log_head - WSG_WEB_LOG_RING
-                                : 0;
-    const size_t cap = sizeof sub->buf;
-    size_t used = put_bytes(sub->buf, 0, head, sizeof head - 1);
-    char note[64];
-    int n;
+    struct wsg_web_ring ring;
 
-    if (sub->log_off < oldest) {
-        n = snprintf(note, sizeof note, "data: (%llu bytes of log missed)\n",
-                     (unsigned long long)(oldest - sub->log_off));
-        used = put_bytes(sub->buf, used, note, (size_t)n);
-        sub->log_off = oldest;
-        /* The ring's oldest byte may be inside a line. */
-        while (sub->log_off < web->log_pushed &&
-               web->log_ring[sub->log_off++ % WSG_WEB_LOG_RING] != '\n')
-            ;
-    }
-    while (sub->log_off < web->log_pushed) {
-        uint64_t end = sub->log_off;
-        size_t len, room;
-
-        while (end < web->log_pushed &&
-               web->log_ring[end % WSG_WEB_LOG_RING] != '\n')
-            end++;
-        len = (size_t)(end - sub->log_off);
-        /* "data: ", the line, its newline, the id line and the event's
-         * blank line. */
-        room = cap - used - 8 - WEB_ID_MAX;
-        if (len > room) {
-            if (used > sizeof head - 1)
-                break;  /* the next event takes it */
-            len = room; /* a line longer than an event: cut */
-        }
-        used = put_bytes(sub->buf, used, "data: ", 6);
-        while (len--)
-            sub->buf[used++] =
-                web->log_ring[sub->log_off++ % WSG_WEB_LOG_RING];
-        sub->buf[used++] = '\n';
-        sub->log_off = end + 1;
-    }
-    /* The offset as the event's id: a browser that reconnects sends it
-     * back (Last-Event-ID) and goes on where it was. */
-    n = snprintf(sub->buf + used, WEB_ID_MAX, "id: %llu\n",
-                 (unsigned long long)sub->log_off);
-    used += (size_t)n;
-    sub->buf[used++] = '\n';
-    return used;
+    ring.buf = web->log_ring;
+    ring.size = WSG_WEB_LOG_RING;
+    ring.oldest = web->log_head > WSG_WEB_LOG_RING
+                      ? web->log_head - WSG_WEB_LOG_RING
+                      : 0;
+    ring.end = web->log_pushed;
+    return wsg_web_sse_log(sub->buf, sizeof sub->buf, &ring, &sub->log_off);
 }
 
 void wsg_web_log_line(struct wsg_web *web, const char *line, size_t len)
@@ -316,18 +278,22 @@ static ssize_t sub_read(void *cls, uint64_t pos, char *buf, size_t max)
         return MHD_CONTENT_READER_END_OF_STREAM;
     if (sub->off == sub->len) {
         if (sub->seq != web->seq) {
-            memcpy(sub->buf, web->event, web->event_len);
-            sub->len = web->event_len;
+            /* It fits (web_state_event_fits); bounded all the same. */
+            sub->len = web->event_len < sizeof sub->buf ? web->event_len
+                                                        : sizeof sub->buf;
+            memcpy(sub->buf, web->event, sub->len);
             sub->seq = web->seq;
-        } else if (sub->log_off < web->log_pushed) {
-            sub->len = log_event(web, sub);
         } else {
+            sub->len =
+                sub->log_off < web->log_pushed ? log_event(web, sub) : 0;
+        }
+        sub->off = 0;
+        if (sub->len == 0) {
             /* Returning 0 has MHD ask again at its next run: suspended,
              * it does not run for this connection until resumed. */
             sub_suspend(sub);
             return 0;
         }
-        sub->off = 0;
     }
     n = sub->len - sub->off < max ? sub->len - sub->off : max;
     memcpy(buf, sub->buf + sub->off, n);
@@ -800,49 +766,34 @@ static enum wsg_web_method method_of(const char *m)
     return 0;
 }
 
-/* A request that changes something from another site's page (its Origin
- * is not this server) is refused: a page anywhere must not stop the
- * gripper through the browser of someone who has this one open. Clients
- * that are not browsers send no Origin. */
-static int foreign_origin(struct MHD_Connection *conn)
+/* The request's Host names this server (web_host.h): a site that points
+ * its own name at the address (DNS rebinding) must not get its pages
+ * into the origin of this one, which could then read and drive the
+ * gripper. Whatever the address it listens on. */
+static int foreign_host(const struct wsg_web *web, struct MHD_Connection *conn)
+{
+    const char *host = MHD_lookup_connection_value(conn, MHD_HEADER_KIND,
+                                                   MHD_HTTP_HEADER_HOST);
+
+    return !wsg_web_host_allowed(host, web->d->opt.web_hosts,
+                                 web->d->opt.web.addr);
+}
+
+/* A request that changes something from another page than this server's
+ * own (its Origin is not http:// and this request's Host) is refused: a
+ * page anywhere must not stop the gripper through the browser of someone
+ * who has this one open. Clients that are not browsers send no Origin. */
+static int foreign_origin(const struct wsg_web *web,
+                          struct MHD_Connection *conn)
 {
     const char *origin, *host;
 
     origin = MHD_lookup_connection_value(conn, MHD_HEADER_KIND,
                                          MHD_HTTP_HEADER_ORIGIN);
-    if (!origin)
-        return 0;
     host = MHD_lookup_connection_value(conn, MHD_HEADER_KIND,
                                        MHD_HTTP_HEADER_HOST);
-    return !host || strncmp(origin, "http://", 7) != 0 ||
-           strcmp(origin + 7, host) != 0;
-}
-
-/* Served on loopback, only a loopback name in the Host header is taken:
- * a name of another site that resolves to 127.0.0.1 (DNS rebinding)
- * would otherwise let that site's pages read and drive the gripper. */
-static int foreign_host(const struct wsg_web *web, struct MHD_Connection *conn)
-{
-    static const char *const names[] = {"localhost", "127.", "[::1]",
-                                        "[::ffff:127."};
-    const char *host;
-    size_t i, n;
-
-    if (!web->loopback)
-        return 0;
-    host = MHD_lookup_connection_value(conn, MHD_HEADER_KIND,
-                                       MHD_HTTP_HEADER_HOST);
-    if (!host)
-        return 0; /* HTTP/1.0: MHD takes it; no browser sends it */
-    for (i = 0; i < sizeof names / sizeof names[0]; i++) {
-        n = strlen(names[i]);
-        if (strncmp(host, names[i], n) != 0)
-            continue;
-        /* "localhost" and "[::1]" end there or at their port. */
-        if (names[i][n - 1] == '.' || host[n] == '\0' || host[n] == ':')
-            return 0;
-    }
-    return 1;
+    return !wsg_web_origin_allowed(origin, host, web->d->opt.web_hosts,
+                                   web->d->opt.web.addr);
 }
 
 /* A form's fields, as MHD's post processor decodes them. */
@@ -862,7 +813,7 @@ static enum MHD_Result on_field(void *cls, enum MHD_ValueKind kind,
     if (off > 0 && req->nfields &&
         strcmp(req->fields[req->nfields - 1].name, key) == 0)
         f = &req->fields[req->nfields - 1];
-    else if (req->nfields < WSG_WEB_FIELDS_MAX &&
+    else if (off == 0 && req->nfields < WSG_WEB_FIELDS_MAX &&
              strlen(key) < WSG_WEB_NAME_MAX)
         f = &req->fields[req->nfields++];
     else {
@@ -871,7 +822,9 @@ static enum MHD_Result on_field(void *cls, enum MHD_ValueKind kind,
     }
     if (off == 0)
         strcpy(f->name, key);
-    if (off + size >= WSG_WEB_VALUE_MAX) {
+    /* Its end and its NUL within the value, without a sum that could
+     * wrap. */
+    if (off >= WSG_WEB_VALUE_MAX || size >= WSG_WEB_VALUE_MAX - off) {
         req->overfull = 1;
         return MHD_YES;
     }
@@ -922,16 +875,21 @@ static enum MHD_Result on_headers(struct wsg_web *web, struct wsg_web_req *req)
     if (foreign_host(web, req->conn)) {
         req->refused = 1;
         return wsg_web_error(req->conn, MHD_HTTP_MISDIRECTED_REQUEST,
-                             "this server answers to its loopback address "
-                             "only");
+                             "Host is not a name of this server: it answers "
+                             "to localhost, 127.x.x.x, [::1], the address "
+                             "it listens on and the names given with "
+                             "--web-host");
     }
     if (!(req->route->methods & req->method)) {
         req->refused = 1;
         return refuse_method(req->conn, req->route->methods);
     }
-    if (req->method != WSG_WEB_GET && foreign_origin(req->conn)) {
+    if (req->method != WSG_WEB_GET && foreign_origin(web, req->conn)) {
         req->refused = 1;
-        return wsg_web_error(req->conn, MHD_HTTP_FORBIDDEN, "foreign origin");
+        return wsg_web_error(req->conn, MHD_HTTP_FORBIDDEN,
+                             "foreign origin: a change is taken from this "
+                             "server's own page (Origin http:// and its "
+                             "Host) or from a client that sends no Origin");
     }
     max = req->route->body_max ? req->route->body_max : WSG_WEB_BODY_MAX;
     clen = MHD_lookup_connection_value(req->conn, MHD_HEADER_KIND,
@@ -950,8 +908,8 @@ static enum MHD_Result on_body(struct wsg_web_req *req, const char *data,
     char *p;
 
     if (req->refused)
-        return MHD_YES; /* the rest of a refused body: dropped */
-    if (req->body_len + n > max)
+        return MHD_YES;          /* the rest of a refused body: dropped */
+    if (n > max - req->body_len) /* body_len <= max: no wrap */
         return too_large(req);
     if (req->body_len + n + 1 > req->body_cap) {
         size_t cap = req->body_cap ? req->body_cap * 2 : 1024;
@@ -1111,7 +1069,6 @@ int wsg_web_open(struct wsg_web **out, struct wsg_daemon *d, char *err,
     web->g = &d->sched.grippers[0];
     web->mhd_watch.fd = -1;
     web->timer.fd = -1;
-    web->loopback = ep->addr[0] == 127;
     r = wsg_web_world_open(web);
     if (r < 0) {
         snprintf(err, errlen, "cannot serve the web page: %s", strerror(-r));
