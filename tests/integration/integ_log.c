@@ -17,6 +17,10 @@
  * acknowledges, and the control commands that changed the world each show
  * as an "event" line. On SIGHUP the daemon opens the file again at its
  * path: after a rename (logrotate), new lines go to a new file there.
+ *
+ * Signals from the very start: a SIGHUP sent while the daemon still reads
+ * its options does not kill it (it reaches its ready line and serves), a
+ * SIGTERM then ends it with status 0 rather than by the signal.
  */
 /* mkdtemp, fdopen, kill */
 #define _POSIX_C_SOURCE 200809L
@@ -25,6 +29,7 @@
 #include "emu.h"
 #include "emu_ctl.h"
 
+#include <fcntl.h>
 #include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -368,6 +373,56 @@ static void test_reopen(const char *dir)
     unlink(old);
 }
 
+/* A signal that comes while the daemon is still reading its options: it
+ * waits for the event loop instead of taking its default action (death).
+ * The config file is a FIFO, so the daemon is held inside its option
+ * parsing, past the dynamic loader, until the test has sent the signal:
+ * no race with the daemon's start. SIGHUP (logrotate's) must leave it
+ * running to its ready line and serving; SIGTERM must end it cleanly
+ * (status 0), not kill it. */
+static void early_signal(const char *dir, int sig)
+{
+    char fifo[512], log[512];
+    const char *args[] = {"--config", fifo, NULL};
+    static const char text[] = "tcp = 127.0.0.1:0\n";
+    struct emu e;
+    struct emu_client c;
+    int fd, st;
+
+    snprintf(fifo, sizeof fifo, "%s/early.conf", dir);
+    snprintf(log, sizeof log, "%s/early.log", dir);
+    REQUIRE(mkfifo(fifo, 0600) == 0);
+    REQUIRE(emu_spawn(&e, exe, args) == 0);
+    /* Opened for writing once the daemon opened it for reading: it is in
+     * main() then, reading its options. */
+    fd = open(fifo, O_WRONLY);
+    REQUIRE(fd >= 0);
+    REQUIRE(kill(e.pid, sig) == 0);
+    CHECK_EQ(write(fd, text, sizeof text - 1), (ssize_t)(sizeof text - 1));
+    close(fd);
+    if (sig == SIGHUP) {
+        REQUIRE(emu_ready(&e) == 0);
+        REQUIRE(emu_open(&c, &e, &emu_tcp) == 0);
+        CHECK_EQ(emu_request(&c, WSG_CMD_LOOP, "hup", 3, NULL, EMU_REPLY_MS),
+                 WSG_E_SUCCESS);
+        emu_close(&c);
+        CHECK_EQ(emu_stop(&e), 0);
+    } else {
+        /* The ready line, then the stop the signal asked for. */
+        st = emu_ready(&e);
+        CHECK_EQ(st, 0);
+        if (st == 0)
+            CHECK_EQ(emu_stop_sig(&e, 0), 0);
+    }
+    unlink(fifo);
+}
+
+static void test_early_signals(const char *dir)
+{
+    early_signal(dir, SIGTERM);
+    early_signal(dir, SIGHUP);
+}
+
 static void test_bad_log(void)
 {
     static const char *const args[] = {"--tcp", "127.0.0.1:0", "--log",
@@ -393,6 +448,7 @@ int main(int argc, char **argv)
     test_log(dir);
     test_events(dir);
     test_reopen(dir);
+    test_early_signals(dir);
     test_bad_log();
     rmdir(dir);
     TEST_EXIT();
