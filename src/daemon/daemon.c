@@ -167,6 +167,7 @@ static int open_gripper(struct wsg_daemon *d, struct wsg_gripper *g,
     g->dev.lookup_ctx = g;
     g->runner = &d->runner;
     g->script_memory = (size_t)o.script_memory << 20;
+    g->script_dir = o.script_dir;
     r = wsg_gripper_set_latency(g, o.latency_ms, o.latency_jitter_ms);
     if (r < 0) {
         fprintf(stderr, "wsgemu: --latency: %s\n", strerror(-r));

@@ -51,6 +51,7 @@ struct wsg_gripper {
      * preempted script asks for its next turn. */
     struct wsg_script *script;
     size_t script_memory; /* --script-memory, bytes */
+    const char *script_dir; /* --script-dir; NULL: none */
     struct wsg_runner *runner;
     struct wsg_gripper *next_ready; /* the runner's list */
     uint8_t ready;
