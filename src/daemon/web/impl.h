@@ -184,6 +184,14 @@ enum MHD_Result wsg_web_serve_script_file(struct wsg_web *web,
                                           struct wsg_web_req *req);
 enum MHD_Result wsg_web_serve_script_run(struct wsg_web *web,
                                          struct wsg_web_req *req);
+/* Run name, a script of the script directory (a plain NAME.lua, as the
+ * file manager takes it), on h: checked and opened in one step, run from
+ * that descriptor. 0, or the HTTP status of the refusal with the reason
+ * in why (400 a bad name, 404, 403 a link or not a file, 409 no script
+ * directory or one runs already, 422 it does not compile or failed as it
+ * started). The caller brings the gripper's time up to date around it. */
+unsigned wsg_web_script_start(struct wsg_web *web, struct wsg_script *h,
+                              const char *name, char *why, size_t cap);
 /* world.c: the control channel's commands and the communication log. */
 int wsg_web_world_open(struct wsg_web *web);
 void wsg_web_world_close(struct wsg_web *web);
