@@ -382,7 +382,7 @@ static void test_reopen(const char *dir)
  * (status 0), not kill it. */
 static void early_signal(const char *dir, int sig)
 {
-    char fifo[512], log[512];
+    char fifo[512];
     const char *args[] = {"--config", fifo, NULL};
     static const char text[] = "tcp = 127.0.0.1:0\n";
     struct emu e;
@@ -390,12 +390,12 @@ static void early_signal(const char *dir, int sig)
     int fd, st;
 
     snprintf(fifo, sizeof fifo, "%s/early.conf", dir);
-    snprintf(log, sizeof log, "%s/early.log", dir);
     REQUIRE(mkfifo(fifo, 0600) == 0);
     REQUIRE(emu_spawn(&e, exe, args) == 0);
     /* Opened for writing once the daemon opened it for reading: it is in
      * main() then, reading its options. */
     fd = open(fifo, O_WRONLY);
+    unlink(fifo);
     REQUIRE(fd >= 0);
     REQUIRE(kill(e.pid, sig) == 0);
     CHECK_EQ(write(fd, text, sizeof text - 1), (ssize_t)(sizeof text - 1));
@@ -414,7 +414,6 @@ static void early_signal(const char *dir, int sig)
         if (st == 0)
             CHECK_EQ(emu_stop_sig(&e, 0), 0);
     }
-    unlink(fifo);
 }
 
 static void test_early_signals(const char *dir)
