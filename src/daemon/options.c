@@ -770,6 +770,30 @@ const struct wsg_setting *wsg_options_settings(size_t *count)
     return settings;
 }
 
+/* No value of any setting holds a control character (a newline, a
+ * carriage return, a tab, ESC, DEL): a path with a newline in it would
+ * write a line of its own into the config file that the web page saves,
+ * and into every message that shows it. Checked here, so the command
+ * line, the config file and the web page all refuse it alike. The value
+ * itself is not shown: the message would carry what it refuses. */
+static int control_free(const char *val, char *err, size_t errcap)
+{
+    size_t i;
+
+    for (i = 0; val[i]; i++) {
+        unsigned char ch = (unsigned char)val[i];
+
+        if (ch < 0x20 || ch == 0x7F) {
+            snprintf(err, errcap,
+                     "a control character (byte 0x%02X at %lu) is not "
+                     "allowed in a value",
+                     ch, (unsigned long)i + 1);
+            return -EINVAL;
+        }
+    }
+    return 0;
+}
+
 /* Apply one setting. val is its text (an argument, a file's value, the
  * default), or NULL for a flag on the command line (--no-crc). line is 0
  * for the command line and the defaults. On error, err gets the reason
@@ -783,6 +807,8 @@ static int apply(struct wsg_options *o, const struct wsg_setting *s,
     char r[64];
     const char *k;
 
+    if (val && control_free(val, err, errcap) < 0)
+        return -EINVAL;
     switch (s->type) {
     case WSG_SETTING_UINT:
         if (parse_uint(val, (unsigned long)s->max, &u) < 0 || u < s->min)

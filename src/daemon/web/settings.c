@@ -25,6 +25,7 @@
 #include <unistd.h>
 
 #include "impl.h"
+#include "script.h"
 
 /* The settings of the page, in its order: the config file's keys (the
  * options table's names) and the labels of the real gripper's page. */
@@ -214,7 +215,9 @@ static int line_key(const char *line, size_t len, char *key, size_t cap)
  * a second one of the same setting dropped (the file's last one would
  * win), the missing ones appended; no startup script drops its lines.
  * Comments and the other lines stay as they are. Written to a file
- * beside it and renamed over it, so a reader never sees half a file. 0
+ * beside it and renamed over it, so a reader never sees half a file. A
+ * value with a line break is never written (-EILSEQ): it would be a line
+ * of its own, any key = value (the options refuse one before this). 0
  * or -errno. */
 static int save_config(const char *path, const struct wsg_options *o,
                        const int *given)
@@ -270,6 +273,10 @@ static int save_config(const char *path, const struct wsg_options *o,
                     continue;
                 keep = 0;
                 value_text(o, rows[k], val, sizeof val);
+                if (strpbrk(val, "\r\n")) {
+                    r = -EILSEQ;
+                    goto out;
+                }
                 if (!written[k] && val[0])
                     out_len += (size_t)sprintf(out + out_len, "%s = %s\n",
                                                rows[k]->name, val);
@@ -289,6 +296,10 @@ static int save_config(const char *path, const struct wsg_options *o,
         if (!given[i] || written[i] || !rows[i])
             continue;
         value_text(o, rows[i], val, sizeof val);
+        if (strpbrk(val, "\r\n")) {
+            r = -EILSEQ;
+            goto out;
+        }
         if (val[0])
             out_len += (size_t)sprintf(out + out_len, "%s = %s\n",
                                        rows[i]->name, val);
@@ -301,6 +312,26 @@ out:
     free(out);
     free(in);
     return r;
+}
+
+/* A startup script the next start could not open would stop it: refused
+ * now, while the user is there to see why. Opened as the start will open
+ * it (wsg_script_open: no link followed, a regular file). One message for
+ * every reason (none there, unreadable, a directory, a link, ...): the
+ * page must not tell whether any path exists. */
+static int script_check(const char *path, char *err, size_t errcap)
+{
+    int fd = wsg_script_open(path, NULL, 0);
+
+    if (fd >= 0) {
+        close(fd);
+        return 0;
+    }
+    snprintf(err, errcap,
+             "script: cannot read '%s' as a startup script (a regular file "
+             "the emulator may read, not a link)",
+             path);
+    return -EINVAL;
 }
 
 /* Make the checked values of o the running daemon's: the options (what
@@ -374,30 +405,26 @@ int wsg_web_settings_apply(struct wsg_web *web,
             break;
         }
         given[k] = 1;
-        if (strcmp(fl->name, "script") == 0) {
-            /* Empty: no startup script (the real page's checkbox off). A
-             * file the next start could not read would stop it: refused
-             * now, while the user is there to see why. */
-            script = fl->value;
-            if (!script[0]) {
-                o->script_path = NULL;
-                continue;
-            }
-            if (access(script, R_OK) < 0) {
-                snprintf(err, errcap, "script: cannot read '%s': %s", script,
-                         strerror(errno));
-                r = -EINVAL;
-                break;
-            }
+        if (strcmp(fl->name, "script") == 0 && !fl->value[0]) {
+            /* Empty: no startup script (the real page's checkbox off). */
+            script = "";
+            o->script_path = NULL;
+            continue;
         }
         r = wsg_options_set(o, fl->name, fl->value, err, errcap);
+        if (r == 0 && strcmp(fl->name, "script") == 0) {
+            script = fl->value;
+            r = script_check(script, err, errcap);
+        }
     }
     if (r == 0 && save) {
         r = save_config(web->d->opt.config_path, o, given);
         if (r < 0) {
             snprintf(err, errcap,
                      "cannot save to %s: %s; the settings were not changed",
-                     web->d->opt.config_path, strerror(-r));
+                     web->d->opt.config_path,
+                     r == -EILSEQ ? "a value holds a line break"
+                                  : strerror(-r));
             r = r == -EINVAL ? -EIO : r;
         }
     }
