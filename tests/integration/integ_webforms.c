@@ -17,6 +17,8 @@
  * - save=1 rewrites the config file (comments kept, lines replaced in
  *   place, missing keys appended) and a daemon started with it has the
  *   values; without --config, save=1 is refused and nothing changes;
+ *   a config file that is a symbolic link or read-only is refused (409)
+ *   and left as it was; a saved file keeps its mode and owner;
  * - POST /motion: a move before homing is E_NOT_INITIALIZED (409); home,
  *   move, jog, grasp (with its force limit), release and stop move the
  *   gripper as 43h and 41h show;
@@ -492,6 +494,65 @@ static void test_save(struct emu *e, struct emu_client *c, struct ctl *k,
     CHECK_EQ(emu_stop(&e2), 0);
 }
 
+/* save=1 on a config file it must not replace: a symbolic link stays a
+ * link (the file it names unchanged), a read-only file stays as it was,
+ * and both are refused (409) with nothing changed; a file it may write
+ * keeps its mode and (where the daemon may give it, as root) its owner. */
+static void test_save_guarded(const char *config)
+{
+    char real[600], before[4096], after[4096];
+    struct stat st;
+    struct emu e;
+
+    start(&e, config);
+
+    /* Its mode and owner stay. */
+    REQUIRE(chmod(config, 0640) == 0);
+    if (geteuid() == 0)
+        REQUIRE(chown(config, 4321, 4322) == 0);
+    else
+        printf("not root: the owner's part is not checked\n");
+    CHECK_EQ(post("/settings.json", "acceleration=310&save=1"), 200);
+    REQUIRE(lstat(config, &st) == 0);
+    CHECK(S_ISREG(st.st_mode));
+    CHECK_EQ(st.st_mode & 07777, 0640);
+    if (geteuid() == 0) {
+        CHECK_EQ(st.st_uid, 4321);
+        CHECK_EQ(st.st_gid, 4322);
+        REQUIRE(chown(config, 0, 0) == 0);
+    }
+    REQUIRE(emu_slurp(config, before, sizeof before) > 0);
+    CHECK(strstr(before, "acceleration = 310\n") != NULL);
+
+    /* Read-only: refused, the file and the settings as they were. */
+    REQUIRE(chmod(config, 0444) == 0);
+    CHECK_EQ(post("/settings.json", "acceleration=320&save=1"), 409);
+    CHECK(has("read-only"));
+    REQUIRE(emu_slurp(config, after, sizeof after) > 0);
+    CHECK(strcmp(before, after) == 0);
+    REQUIRE(stat(config, &st) == 0);
+    CHECK_EQ(st.st_mode & 07777, 0444);
+    CHECK_EQ(get_settings(), 200);
+    CHECK_NEAR(setting(ans.body, "acceleration"), 310.0, 1e-9);
+    REQUIRE(chmod(config, 0644) == 0);
+
+    /* A link: refused, still a link, the file it names as it was. */
+    snprintf(real, sizeof real, "%s.real", config);
+    REQUIRE(rename(config, real) == 0);
+    REQUIRE(symlink(real, config) == 0);
+    CHECK_EQ(post("/settings.json", "acceleration=330&save=1"), 409);
+    CHECK(has("symbolic link"));
+    REQUIRE(lstat(config, &st) == 0);
+    CHECK(S_ISLNK(st.st_mode));
+    REQUIRE(emu_slurp(real, after, sizeof after) > 0);
+    CHECK(strcmp(before, after) == 0);
+    CHECK_EQ(get_settings(), 200);
+    CHECK_NEAR(setting(ans.body, "acceleration"), 310.0, 1e-9);
+    REQUIRE(unlink(config) == 0);
+    REQUIRE(rename(real, config) == 0);
+    CHECK_EQ(emu_stop(&e), 0);
+}
+
 int main(int argc, char **argv)
 {
     char config[512];
@@ -516,6 +577,7 @@ int main(int argc, char **argv)
     test_forms(&c);
     test_script_setting(config);
     test_save(&e, &c, &k, config);
+    test_save_guarded(config);
 
     unlink(config);
     TEST_EXIT();

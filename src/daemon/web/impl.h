@@ -152,10 +152,13 @@ void wsg_web_done(struct wsg_web *web);
 
 /* Replace the file name (relative to dfd, or AT_FDCWD) with len bytes of
  * buf, through the temporary file tmp beside it: written, synced and
- * renamed over it; links are not followed. mode: the new file's mode,
- * or -1 for 0644 less the umask. 0 or -errno (nothing is replaced). */
+ * renamed over it; links are not followed. like: the file whose owner
+ * and mode the new one takes (-EPERM when the owner cannot be given), or
+ * NULL for the daemon's user and 0644 less the umask. 0 or -errno
+ * (nothing is replaced). */
+struct stat;
 int wsg_web_replace_file(int dfd, const char *name, const char *tmp,
-                         const void *buf, size_t len, int mode);
+                         const void *buf, size_t len, const struct stat *like);
 
 /* ---- the parts' handlers ---- */
 

@@ -273,7 +273,7 @@ static enum MHD_Result file_put(struct wsg_web_req *req, int dfd,
     existed = status == 0;
     /* Hidden: no script's name starts with a dot. */
     snprintf(tmp, sizeof tmp, ".%s.part", name);
-    r = wsg_web_replace_file(dfd, name, tmp, req->body, req->body_len, -1);
+    r = wsg_web_replace_file(dfd, name, tmp, req->body, req->body_len, NULL);
     if (r < 0)
         goto fail;
     return wsg_web_json(req->conn, existed ? MHD_HTTP_OK : MHD_HTTP_CREATED,

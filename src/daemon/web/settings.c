@@ -13,7 +13,7 @@
  * every gripper of a fleet was made from, so they change for every
  * gripper, as a restart with the saved file would have them.
  */
-#define _POSIX_C_SOURCE 200809L /* fstat, AT_FDCWD */
+#define _GNU_SOURCE /* faccessat's AT_EACCESS */
 
 #include <errno.h>
 #include <fcntl.h>
@@ -215,7 +215,11 @@ static int line_key(const char *line, size_t len, char *key, size_t cap)
  * a second one of the same setting dropped (the file's last one would
  * win), the missing ones appended; no startup script drops its lines.
  * Comments and the other lines stay as they are. Written to a file
- * beside it and renamed over it, so a reader never sees half a file. A
+ * beside it with the file's owner and mode and renamed over it, so a
+ * reader never sees half a file. Refused: a symbolic link (-ELOOP), what
+ * is not a regular file (-ENOEXEC), a file the daemon may not write or
+ * that has no write bit (-EACCES, -EROFS), one whose owner the daemon
+ * may not give the new file (-EPERM). A
  * value with a line break is never written (-EILSEQ): it would be a line
  * of its own, any key = value (the options refuse one before this). 0
  * or -errno. */
@@ -228,14 +232,29 @@ static int save_config(const char *path, const struct wsg_options *o,
     size_t in_len = 0, out_len = 0, out_cap, i, n;
     struct stat st;
     FILE *f;
-    int r;
+    int fd, r;
 
     for (i = 0; i < WEB_NSETTINGS; i++)
         rows[i] = table_row(web_settings[i].key);
-    f = fopen(path, "r");
-    if (!f)
+    /* A link is not replaced by a file, nor a file the daemon may not
+     * write overwritten (a read-only one: no write bit at all, whoever
+     * the daemon runs as). */
+    fd = open(path, O_RDONLY | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC);
+    if (fd < 0)
         return -errno;
+    f = fdopen(fd, "r");
+    if (!f) {
+        r = -errno;
+        close(fd);
+        return r;
+    }
     r = fstat(fileno(f), &st) < 0 ? -errno : 0;
+    if (r == 0 && !S_ISREG(st.st_mode))
+        r = -ENOEXEC;
+    if (r == 0 && faccessat(AT_FDCWD, path, W_OK, AT_EACCESS) < 0)
+        r = errno == EROFS ? -EROFS : -EACCES;
+    if (r == 0 && !(st.st_mode & 0222))
+        r = -EACCES;
     if (r == 0 && st.st_size > (off_t)WEB_CONFIG_MAX)
         r = -EFBIG;
     if (r == 0) {
@@ -305,8 +324,7 @@ static int save_config(const char *path, const struct wsg_options *o,
                                        rows[i]->name, val);
     }
     sprintf(tmp, "%s.new", path);
-    r = wsg_web_replace_file(AT_FDCWD, path, tmp, out, out_len,
-                             (int)(st.st_mode & 07777));
+    r = wsg_web_replace_file(AT_FDCWD, path, tmp, out, out_len, &st);
 out:
     free(tmp);
     free(out);
@@ -366,6 +384,28 @@ static void apply(struct wsg_web *web, const struct wsg_options *o,
     wsg_daemon_reconfigure(d, model);
 }
 
+/* Why save_config refused, for the page. */
+static const char *save_error(int r)
+{
+    switch (r) {
+    case -ELOOP:
+        return "it is a symbolic link, which saving would replace by a "
+               "file (give --config the file it names)";
+    case -ENOEXEC:
+        return "it is not a regular file";
+    case -EACCES:
+    case -EROFS:
+        return "it is read-only to the emulator";
+    case -EPERM:
+        return "it belongs to a user or group the emulator may not give "
+               "the saved file";
+    case -EILSEQ:
+        return "a value holds a line break";
+    default:
+        return strerror(-r);
+    }
+}
+
 int wsg_web_settings_apply(struct wsg_web *web,
                            const struct wsg_web_field *fields, size_t n,
                            int save, char *err, size_t errcap)
@@ -422,9 +462,7 @@ int wsg_web_settings_apply(struct wsg_web *web,
         if (r < 0) {
             snprintf(err, errcap,
                      "cannot save to %s: %s; the settings were not changed",
-                     web->d->opt.config_path,
-                     r == -EILSEQ ? "a value holds a line break"
-                                  : strerror(-r));
+                     web->d->opt.config_path, save_error(r));
             r = r == -EINVAL ? -EIO : r;
         }
     }
@@ -454,10 +492,15 @@ static enum MHD_Result serve_post(struct wsg_web *web, struct wsg_web_req *req)
         if (strcmp(req->fields[i].name, "save") != 0)
             fields[n++] = req->fields[i];
     r = wsg_web_settings_apply(web, fields, n, saving, err, sizeof err);
+    /* 409: the config file is in a state the save must not change (a
+     * link, read-only, another's). */
     if (r < 0)
         return wsg_web_error(req->conn,
                              r == -EINVAL ? MHD_HTTP_BAD_REQUEST
-                                          : MHD_HTTP_INTERNAL_SERVER_ERROR,
+                             : r == -ELOOP || r == -ENOEXEC || r == -EACCES ||
+                                     r == -EROFS || r == -EPERM
+                                 ? MHD_HTTP_CONFLICT
+                                 : MHD_HTTP_INTERNAL_SERVER_ERROR,
                              err);
     if (saving)
         snprintf(msg, sizeof msg, "applied and saved to %s",
