@@ -674,6 +674,30 @@ static const struct wsg_setting settings[] = {
      .help = "the gripper's /user: the web page\n"
              "lists, uploads, runs and deletes the\n"
              "scripts in DIR (default none)"},
+    /* Uploads alone fill the directory: bounds on what they may fill it
+     * with, far above what a gripper's scripts need. */
+    {.name = "script-quota",
+     .type = WSG_SETTING_UINT,
+     .at = WSG_AT(script_quota),
+     .min = 0,
+     .max = 4294967295.0,
+     .unit = "bytes",
+     .def = "16777216",
+     .section = WSG_SECTION_GRIPPER,
+     .arg = "BYTES",
+     .help = "the script directory's scripts may\n"
+             "take BYTES in all after an upload\n"
+             "({range}, default {default})"},
+    {.name = "script-files",
+     .type = WSG_SETTING_UINT,
+     .at = WSG_AT(script_files),
+     .min = 0,
+     .max = WSG_SCRIPT_FILES_MAX,
+     .def = "256",
+     .section = WSG_SECTION_GRIPPER,
+     .arg = "N",
+     .help = "scripts the directory may hold after\n"
+             "an upload ({range}, default {default})"},
     {.name = "script-memory",
      .type = WSG_SETTING_UINT,
      .at = WSG_AT(script_memory),

@@ -12,7 +12,10 @@
  *   outside, is neither read, written, deleted nor run (403), and the file
  *   it points to is unchanged;
  * - caps: 256 KiB is taken, a Content-Length of one byte more refused
- *   (413) before the body is sent;
+ *   (413) before the body is sent; the directory's bounds (--script-quota,
+ *   --script-files): an upload past its bytes or count is refused (507;
+ *   413 for one larger than the quota itself) and not written, a
+ *   replacement counts for its new size;
  * - run: a script uploaded and run from the page (POST /script/run)
  *   registers its own command ID and answers it over TCP; the state shows
  *   it running (D19, "script"); what it prints comes in the event
@@ -531,6 +534,63 @@ static void test_race(void)
     unlink(outside_lua);
 }
 
+/* n bytes of a comment, as a script's text. */
+static const char *text_of(size_t n)
+{
+    static char buf[2048];
+
+    memset(buf, '-', n);
+    buf[n] = '\0';
+    return buf;
+}
+
+/* Uploads within the directory's bounds (--script-quota 1000
+ * --script-files 3): past the bytes 507 (a script larger than the whole
+ * quota 413), past the count 507, a replacement counted for its new size
+ * only; what is refused is not written. */
+static void test_quota(const char *exe)
+{
+    const char *args[] = {
+        "--tcp", "127.0.0.1:0",    "--web", "127.0.0.1:0",    "--script-dir",
+        dir,     "--script-quota", "1000",  "--script-files", "3",
+        NULL};
+    char path[512];
+    struct emu e;
+
+    REQUIRE(emu_start(&e, exe, args) == 0);
+    REQUIRE(emu_field(&e, "web", web, sizeof web) != NULL);
+    CHECK_EQ(dir_entries(), 0);
+    CHECK_EQ(req("PUT", "/scripts/a.lua", text_of(400)), 201);
+    CHECK_EQ(req("PUT", "/scripts/b.lua", text_of(400)), 201);
+    /* 1100 bytes in all: no room. */
+    CHECK_EQ(req("PUT", "/scripts/c.lua", text_of(300)), 507);
+    CHECK(strstr(ans.body, "--script-quota") != NULL);
+    /* A replacement: its new size in place of its old one. */
+    CHECK_EQ(req("PUT", "/scripts/a.lua", text_of(600)), 200);
+    CHECK_EQ(req("PUT", "/scripts/a.lua", text_of(601)), 507);
+    /* More than the quota on its own. */
+    CHECK_EQ(req("PUT", "/scripts/c.lua", text_of(1001)), 413);
+    CHECK_EQ(req("PUT", "/scripts/c.lua", "-"), 507);
+    CHECK_EQ(dir_entries(), 2);
+    /* Room again; then the count is the bound. */
+    CHECK_EQ(req("DELETE", "/scripts/b.lua", NULL), 200);
+    CHECK_EQ(req("PUT", "/scripts/c.lua", text_of(100)), 201);
+    CHECK_EQ(req("PUT", "/scripts/d.lua", text_of(10)), 201);
+    CHECK_EQ(req("PUT", "/scripts/e.lua", "-"), 507);
+    CHECK(strstr(ans.body, "--script-files") != NULL);
+    CHECK_EQ(req("PUT", "/scripts/d.lua", text_of(20)), 200);
+    CHECK_EQ(dir_entries(), 3);
+    snprintf(path, sizeof path, "%s/e.lua", dir);
+    CHECK(!exists(path));
+    CHECK_EQ(emu_stop(&e), 0);
+    snprintf(path, sizeof path, "%s/a.lua", dir);
+    unlink(path);
+    snprintf(path, sizeof path, "%s/c.lua", dir);
+    unlink(path);
+    snprintf(path, sizeof path, "%s/d.lua", dir);
+    unlink(path);
+}
+
 /* A daemon without --script-dir: every endpoint says what is missing. */
 static void test_no_dir(const char *exe)
 {
@@ -579,8 +639,6 @@ int main(int argc, char **argv)
     test_control_run();
     test_race();
     CHECK_EQ(emu_stop(&e), 0);
-    test_no_dir(exe);
-
     /* Only what the test made. */
     snprintf(path, sizeof path, "%s/ping.lua", dir);
     unlink(path);
@@ -588,6 +646,9 @@ int main(int argc, char **argv)
     unlink(path);
     snprintf(path, sizeof path, "%s/syntax.lua", dir);
     unlink(path);
+    test_quota(exe);
+    test_no_dir(exe);
+
     unlink(outside);
     CHECK_EQ(rmdir(dir), 0);
     CHECK_EQ(rmdir(top), 0);

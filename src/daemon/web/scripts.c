@@ -12,6 +12,8 @@
  * swapped in after the check cannot lead out either. An upload is written
  * to a hidden temporary file and renamed over the name, so a script is
  * never seen half written (a running script's `require` included).
+ * Uploads are bounded: the directory's scripts may take --script-quota
+ * bytes and be --script-files in number after one.
  */
 #define _GNU_SOURCE
 
@@ -257,9 +259,87 @@ static enum MHD_Result file_get(struct wsg_web_req *req, int dfd,
     return ret;
 }
 
+/* The scripts of the directory (what the list shows) but name, which an
+ * upload replaces: how many, and their bytes. 0 or -errno. */
+static int dir_usage(int dfd, const char *name, unsigned long *count,
+                     unsigned long long *bytes)
+{
+    char why[128];
+    struct dirent *de;
+    struct stat st;
+    DIR *dir;
+    int fd;
+
+    *count = 0;
+    *bytes = 0;
+    /* A description of its own: reading it moves no offset of dfd's. */
+    fd = openat(dfd, ".", O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+    if (fd < 0)
+        return -errno;
+    dir = fdopendir(fd);
+    if (!dir) {
+        int r = -errno;
+
+        close(fd);
+        return r;
+    }
+    while ((de = readdir(dir)) != NULL) {
+        if (strcmp(de->d_name, name) == 0 ||
+            name_check(de->d_name, why, sizeof why) < 0 ||
+            file_stat(fd, de->d_name, &st, why, sizeof why) != 0)
+            continue;
+        (*count)++;
+        *bytes += (unsigned long long)st.st_size;
+    }
+    closedir(dir);
+    return 0;
+}
+
+/* An upload past the directory's bounds (--script-quota, --script-files):
+ * 0, or the answer's status with the reason in why: 413 for a script
+ * larger than the whole quota, 507 for one the directory has no room
+ * left for. */
+static unsigned quota_check(const struct wsg_options *o, int dfd,
+                            const char *name, size_t len, char *why,
+                            size_t cap)
+{
+    unsigned long long bytes;
+    unsigned long count;
+    int r;
+
+    if (len > o->script_quota) {
+        snprintf(why, cap,
+                 "%s: %lu bytes are more than the script directory may hold "
+                 "(%lu bytes, --script-quota)",
+                 name, (unsigned long)len, (unsigned long)o->script_quota);
+        return MHD_HTTP_CONTENT_TOO_LARGE;
+    }
+    r = dir_usage(dfd, name, &count, &bytes);
+    if (r < 0) {
+        snprintf(why, cap, "%s not saved: %s", name, strerror(-r));
+        return MHD_HTTP_INTERNAL_SERVER_ERROR;
+    }
+    if (count + 1 > o->script_files) {
+        snprintf(why, cap,
+                 "%s not saved: the script directory holds %lu scripts, "
+                 "at most %lu (--script-files): delete one first",
+                 name, count, (unsigned long)o->script_files);
+        return MHD_HTTP_INSUFFICIENT_STORAGE;
+    }
+    if (bytes + len > o->script_quota) {
+        snprintf(why, cap,
+                 "%s not saved: the scripts would take %llu bytes, at most "
+                 "%lu (--script-quota): delete some first",
+                 name, bytes + len, (unsigned long)o->script_quota);
+        return MHD_HTTP_INSUFFICIENT_STORAGE;
+    }
+    return 0;
+}
+
 /* PUT: the body becomes the file, through a temporary file renamed over
- * it: 201 made, 200 replaced. */
-static enum MHD_Result file_put(struct wsg_web_req *req, int dfd,
+ * it: 201 made, 200 replaced; within the directory's bounds. */
+static enum MHD_Result file_put(const struct wsg_web *web,
+                                struct wsg_web_req *req, int dfd,
                                 const char *name)
 {
     char why[256], tmp[SCRIPT_NAME_MAX + 8];
@@ -271,6 +351,10 @@ static enum MHD_Result file_put(struct wsg_web_req *req, int dfd,
     if (status != 0 && status != MHD_HTTP_NOT_FOUND)
         return wsg_web_error(req->conn, status, why);
     existed = status == 0;
+    status =
+        quota_check(&web->d->opt, dfd, name, req->body_len, why, sizeof why);
+    if (status != 0)
+        return wsg_web_error(req->conn, status, why);
     /* Hidden: no script's name starts with a dot. */
     snprintf(tmp, sizeof tmp, ".%s.part", name);
     r = wsg_web_replace_file(dfd, name, tmp, req->body, req->body_len, NULL);
@@ -325,7 +409,7 @@ enum MHD_Result wsg_web_serve_script_file(struct wsg_web *web,
     if (dfd < 0)
         return dir_error(web, req->conn, dfd);
     if (req->method == WSG_WEB_PUT)
-        ret = file_put(req, dfd, name);
+        ret = file_put(web, req, dfd, name);
     else if (req->method == WSG_WEB_DELETE)
         ret = file_delete(req, dfd, name);
     else
