@@ -342,6 +342,7 @@ int wsg_daemon_open(struct wsg_daemon *d)
             fprintf(stderr, "wsgemu: %s\n", err);
             return r;
         }
+        wsg_log_limit(&d->log, d->opt.log_max);
     }
     d->rx = malloc(WSG_DAEMON_RX_MAX);
     if (!d->rx) {

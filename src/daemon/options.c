@@ -752,6 +752,21 @@ static const struct wsg_setting settings[] = {
      .help = "communication log: one line per\n"
              "packet and per event; '-' for\n"
              "stderr; SIGHUP opens FILE again"},
+    /* A log nobody rotates must not fill the disk: a bound by default,
+     * generous for a day of a busy test rig. */
+    {.name = "log-max",
+     .type = WSG_SETTING_UINT,
+     .at = WSG_AT(log_max),
+     .min = 0,
+     .max = 4294967295.0,
+     .unit = "bytes",
+     .def = "67108864",
+     .section = WSG_SECTION_EMULATOR,
+     .arg = "BYTES",
+     .help = "at BYTES the log FILE is moved to\n"
+             "FILE.old (replacing it) and a new\n"
+             "one begins ({range}, default\n"
+             "{default}; 0: no bound)"},
     {.name = "config",
      .type = WSG_SETTING_CONFIG,
      .at = WSG_AT(config_path),

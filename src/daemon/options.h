@@ -75,6 +75,7 @@ struct wsg_options {
     struct wsg_endpoint web;     /* the web page (loopback default) */
     double time_scale;           /* simulated seconds per real second */
     const char *log_path;        /* NULL: no log; "-": stderr */
+    uint32_t log_max;            /* --log-max: bytes a log file may reach */
     const char *config_path;     /* --config FILE, read before the options */
     struct wsg_model_value initial_part; /* --part WIDTH */
     double initial_part_stiffness;       /* N/mm; 0: the model's default */
