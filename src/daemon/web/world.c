@@ -46,11 +46,18 @@ static void on_ctl_answer(void *ctx, const char *line, size_t len)
 static int on_ctl_script_run(void *ctx, struct wsg_script *h, const char *file,
                              char *err, size_t errcap)
 {
+    unsigned status;
     char why[512];
 
-    if (wsg_web_script_start(ctx, h, file, why, sizeof why) == 0)
+    status = wsg_web_script_start(ctx, h, file, why, sizeof why);
+    if (status == 0)
         return 0;
-    snprintf(err, errcap, "%s (the page runs NAME.lua of --script-dir)", why);
+    /* A path, or a bad name: what the page takes instead. */
+    if (status == MHD_HTTP_BAD_REQUEST)
+        snprintf(err, errcap, "%s (the page runs NAME.lua of --script-dir)",
+                 why);
+    else
+        snprintf(err, errcap, "%s", why);
     return -1;
 }
 
