@@ -41,6 +41,8 @@ if [ "$test_deps" = 1 ]; then
     # The package test also holds the .deb to Debian's own checks: lintian,
     # errors and warnings (tests/package/run.sh).
     pkgs="$pkgs lintian"
+    # ... and runs the logrotate snippet it installs.
+    pkgs="$pkgs logrotate"
     # The container image (scripts/container.sh, tests/container/run.sh):
     # podman builds and runs it; runc because crun refuses a cgroup v1/v2
     # hybrid; ip brings up loopback where the test runs the exported rootfs.

@@ -516,7 +516,10 @@ static void cmd_script(struct ctl_ctx *c, int argc, char **argv)
         return;
     }
     if (strcmp(argv[1], "run") == 0 && argc == 3) {
-        r = wsg_script_start(h, argv[2], err, sizeof err);
+        if (c->s->script_run)
+            r = c->s->script_run(c->s->ctx, h, argv[2], err, sizeof err);
+        else
+            r = wsg_script_start(h, argv[2], err, sizeof err);
         if (r < 0)
             reply(c, "error script: %s", err);
         else

@@ -27,6 +27,7 @@
 #define WSG_CTL_CLIENTS_MAX 16u
 
 struct wsg_ctl;
+struct wsg_script;
 
 /* One client's side of the conversation: the line it is sending, the
  * gripper its commands act on (`gripper N`), and where its answers go:
@@ -40,6 +41,11 @@ struct wsg_ctl_session {
     char line[WSG_CTL_LINE_MAX + 1];
     void (*answer)(void *ctx, const char *line, size_t len);
     void *ctx;
+    /* `script run FILE` for this session, in place of running any file
+     * the daemon can read: the web page's, kept to its script directory.
+     * NULL: any file. 0, or -1 with the reason in err. */
+    int (*script_run)(void *ctx, struct wsg_script *h, const char *file,
+                      char *err, size_t errcap);
 };
 
 /* A control channel on the scheduler's grippers that serves no socket

@@ -1,6 +1,7 @@
 /*
- * Assembly of the daemon: the signal mask first (nothing may be announced
- * before SIGTERM is caught), the reactor and its services (the scheduler,
+ * Assembly of the daemon: the signal mask first (main blocks the handled
+ * signals before anything else, so none takes its default action while
+ * the daemon starts), the reactor and its services (the scheduler,
  * the file watches, a signalfd); then each gripper's device configured
  * from the options, its lookup routing final results by tag to the
  * gripper's own transport that owns the session, and its transports
@@ -166,6 +167,7 @@ static int open_gripper(struct wsg_daemon *d, struct wsg_gripper *g,
     g->dev.lookup_ctx = g;
     g->runner = &d->runner;
     g->script_memory = (size_t)o.script_memory << 20;
+    g->script_dir = o.script_dir;
     r = wsg_gripper_set_latency(g, o.latency_ms, o.latency_jitter_ms);
     if (r < 0) {
         fprintf(stderr, "wsgemu: --latency: %s\n", strerror(-r));
@@ -245,21 +247,37 @@ static int start_script(struct wsg_daemon *d, struct wsg_gripper *g)
     return r;
 }
 
-/* Signals come through a descriptor: blocked before anything else exists,
- * so a SIGTERM sent right after the ready line is queued for it, never
- * the default action. They stay blocked after close: a second SIGTERM
- * must not turn a clean exit into death by signal. */
+/* The signals the daemon handles (through a descriptor, below). */
+static void handled_signals(sigset_t *mask)
+{
+    sigemptyset(mask);
+    sigaddset(mask, SIGINT);
+    sigaddset(mask, SIGTERM);
+    sigaddset(mask, SIGHUP); /* reopen the log */
+}
+
+int wsg_daemon_block_signals(void)
+{
+    sigset_t mask;
+
+    handled_signals(&mask);
+    return sigprocmask(SIG_BLOCK, &mask, NULL) < 0 ? -errno : 0;
+}
+
+/* Signals come through a descriptor. They were blocked first thing in
+ * main (wsg_daemon_block_signals), so one sent while the options were
+ * read, or right after the ready line, waits here, never taking the
+ * default action. They stay blocked after close: a second SIGTERM must
+ * not turn a clean exit into death by signal. */
 static int open_signals(struct wsg_daemon *d)
 {
     sigset_t mask;
-    int fd;
+    int fd, r;
 
-    sigemptyset(&mask);
-    sigaddset(&mask, SIGINT);
-    sigaddset(&mask, SIGTERM);
-    sigaddset(&mask, SIGHUP); /* reopen the log */
-    if (sigprocmask(SIG_BLOCK, &mask, NULL) < 0)
-        return -errno;
+    r = wsg_daemon_block_signals();
+    if (r < 0)
+        return r;
+    handled_signals(&mask);
     fd = signalfd(-1, &mask, SFD_NONBLOCK | SFD_CLOEXEC);
     if (fd < 0)
         return -errno;
@@ -324,6 +342,7 @@ int wsg_daemon_open(struct wsg_daemon *d)
             fprintf(stderr, "wsgemu: %s\n", err);
             return r;
         }
+        wsg_log_limit(&d->log, d->opt.log_max);
     }
     d->rx = malloc(WSG_DAEMON_RX_MAX);
     if (!d->rx) {

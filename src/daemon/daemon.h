@@ -41,6 +41,11 @@ struct wsg_daemon {
     struct wsg_log log; /* the communication log (--log); closed: f NULL */
 };
 
+/* Block the signals the daemon handles (SIGINT, SIGTERM, SIGHUP): first
+ * thing in main, so that one sent while the daemon starts (logrotate's
+ * SIGHUP, a service manager's SIGTERM) waits for the event loop instead of
+ * killing it. 0 or -errno. */
+int wsg_daemon_block_signals(void);
 /* Set up the grippers, the reactor and its services, and every transport the
  * options enable. On failure print "wsgemu: ..." and return -errno;
  * wsg_daemon_close is safe either way. */

@@ -180,7 +180,7 @@ static void gripper_script_wake(void *ctx)
 int wsg_gripper_script(struct wsg_gripper *g, struct wsg_script **out)
 {
     struct wsg_script_config cfg = {g->script_memory, gripper_script_print,
-                                    gripper_script_wake, g};
+                                    gripper_script_wake, g, g->script_dir};
     int r = 0;
 
     if (!g->script)

@@ -50,7 +50,8 @@ struct wsg_gripper {
     /* Its script host, made on first use (NULL: none yet), and where a
      * preempted script asks for its next turn. */
     struct wsg_script *script;
-    size_t script_memory; /* --script-memory, bytes */
+    size_t script_memory;   /* --script-memory, bytes */
+    const char *script_dir; /* --script-dir; NULL: none */
     struct wsg_runner *runner;
     struct wsg_gripper *next_ready; /* the runner's list */
     uint8_t ready;

@@ -6,7 +6,8 @@
  * are decoded by the schema's layout for the command (wsg/schema.h), so
  * every field the schema knows is shown by name. Each line is built in a
  * stack buffer and handed to stdio in one call, so a line is never split
- * between two flushes.
+ * between two flushes, nor between two files when the size bound
+ * (--log-max) moves the file aside.
  */
 #define _GNU_SOURCE /* localtime_r, clock_gettime */
 
@@ -16,6 +17,8 @@
 #include <stdarg.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include "wsg/proto.h"
 
@@ -205,13 +208,59 @@ static void head(struct wsg_log_tap *tap, struct line *l,
     put_str(l, name ? name : "unknown");
 }
 
+static int open_file(struct wsg_log *l, const char *path, const char *mode,
+                     char *err, size_t errcap);
+
+/* The file reached its bound: it becomes PATH.old and a new one begins at
+ * PATH. When the file at PATH is no longer this one (logrotate moved it
+ * and its SIGHUP has not come yet), a new one begins without moving
+ * anything. When neither can be done (the directory is read-only to the
+ * daemon), the file is cut to nothing: the bound holds whatever
+ * happens. */
+static void rotate(struct wsg_log *lg)
+{
+    size_t n = strlen(lg->path) + 5;
+    struct wsg_log fresh;
+    struct stat now, mine;
+    char err[256], *old;
+    int moved = 0;
+
+    fflush(lg->f);
+    old = malloc(n);
+    if (old && fstat(fileno(lg->f), &mine) == 0) {
+        snprintf(old, n, "%s.old", lg->path);
+        if (stat(lg->path, &now) < 0 || now.st_dev != mine.st_dev ||
+            now.st_ino != mine.st_ino)
+            moved = 1;
+        else
+            moved = rename(lg->path, old) == 0;
+    }
+    free(old);
+    memset(&fresh, 0, sizeof fresh);
+    if (moved && open_file(&fresh, lg->path, "w", err, sizeof err) == 0) {
+        fclose(lg->f);
+        free(lg->buf);
+        lg->f = fresh.f;
+        lg->buf = fresh.buf;
+    } else if (ftruncate(fileno(lg->f), 0) < 0 ||
+               fseek(lg->f, 0, SEEK_SET) < 0) {
+        return; /* nothing to be done: size stays, the next line tries */
+    }
+    lg->size = 0;
+}
+
 static void emit(struct wsg_log *lg, struct line *l)
 {
     if (l->n >= sizeof l->s - 1)
         l->n = sizeof l->s - 2; /* a cut line still ends its line */
     l->s[l->n++] = '\n';
-    if (lg->f)
+    if (lg->f && lg->own && lg->max && lg->size > 0 &&
+        lg->size + l->n > lg->max)
+        rotate(lg);
+    if (lg->f) {
         fwrite(l->s, 1, l->n, lg->f);
+        lg->size += l->n;
+    }
     if (lg->sink)
         lg->sink(lg->sink_ctx, l->s, l->n);
 }
@@ -332,6 +381,7 @@ static int open_file(struct wsg_log *l, const char *path, const char *mode,
                      char *err, size_t errcap)
 {
     FILE *f = fopen(path, mode);
+    struct stat st;
     char *buf;
     int r;
 
@@ -341,6 +391,8 @@ static int open_file(struct wsg_log *l, const char *path, const char *mode,
                  strerror(-r));
         return r;
     }
+    /* What it holds already counts against the bound. */
+    l->size = fstat(fileno(f), &st) == 0 ? (uint64_t)st.st_size : 0;
     /* Fully buffered; the loop flushes after each batch of events. */
     buf = malloc(WSG_LOG_BUFSIZE);
     if (buf)
@@ -361,7 +413,13 @@ int wsg_log_open(struct wsg_log *l, const char *path, char *err, size_t errcap)
         setvbuf(stderr, NULL, _IOLBF, 0);
         return 0;
     }
+    l->path = path;
     return open_file(l, path, "w", err, errcap);
+}
+
+void wsg_log_limit(struct wsg_log *l, uint64_t max)
+{
+    l->max = max;
 }
 
 int wsg_log_reopen(struct wsg_log *l, const char *path, char *err,
@@ -383,6 +441,8 @@ int wsg_log_reopen(struct wsg_log *l, const char *path, char *err,
     free(l->buf);
     l->f = fresh.f;
     l->buf = fresh.buf;
+    l->size = fresh.size;
+    l->path = path;
     return 0;
 }
 

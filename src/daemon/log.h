@@ -43,6 +43,7 @@
 #define WSG_DAEMON_LOG_H
 
 #include <stddef.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <time.h>
 
@@ -52,11 +53,14 @@
 #define WSG_LOG_BUFSIZE 65536u
 
 struct wsg_log {
-    FILE *f;       /* NULL: closed */
-    int own;       /* opened here (fclose it), not stderr */
-    char *buf;     /* setvbuf's buffer, owned */
-    time_t sec;    /* wall clock second that clock[] shows */
-    char clock[9]; /* "HH:MM:SS" of sec, cached: localtime per line costs */
+    FILE *f;          /* NULL: closed */
+    int own;          /* opened here (fclose it), not stderr */
+    const char *path; /* the file's (own only), for the bound's rename */
+    uint64_t max;     /* bytes a file may reach (--log-max); 0: no bound */
+    uint64_t size;    /* bytes in the file now */
+    char *buf;        /* setvbuf's buffer, owned */
+    time_t sec;       /* wall clock second that clock[] shows */
+    char clock[9];    /* "HH:MM:SS" of sec, cached: localtime per line costs */
     /* A second reader of every line (the web page's log view), newline
      * included; NULL: none. Lines are made only when f or sink wants
      * them. */
@@ -71,9 +75,16 @@ struct wsg_log_tap {
     int index;                    /* gripper number in a fleet; -1: none */
 };
 
-/* Open path ("-": stderr). Returns 0, or -errno with the reason in err. */
+/* Open path ("-": stderr), which must outlive the log. Returns 0, or
+ * -errno with the reason in err. */
 int wsg_log_open(struct wsg_log *l, const char *path, char *err,
                  size_t errcap);
+/* Bound the file (not stderr) to max bytes (--log-max; 0: none): a line
+ * that would take it past max first moves it to PATH.old, replacing the
+ * one before, and goes into a new file at PATH. So the log keeps the
+ * newest lines, between max and 2 * max bytes of them, at lines' ends.
+ * PATH.old, not PATH.1: that is logrotate's, which must not be lost. */
+void wsg_log_limit(struct wsg_log *l, uint64_t max);
 /* Open path again (after logrotate renamed it: SIGHUP), appending if it
  * exists. The old file is closed only once the new one is open. stderr
  * stays as it is. Returns 0, or -errno with the reason in err. */

@@ -18,6 +18,10 @@ int main(int argc, char **argv)
     struct sigaction sa;
     int status = 1;
 
+    /* Before anything else: a signal sent while the options are read is
+     * kept for the event loop, not the death of a half-started daemon. */
+    if (wsg_daemon_block_signals() < 0)
+        return 1;
     memset(&d, 0, sizeof d);
     wsg_options_defaults(&d.opt);
     switch (wsg_options_parse(&d.opt, argc, argv)) {

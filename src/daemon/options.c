@@ -732,6 +732,30 @@ static const struct wsg_setting settings[] = {
      .help = "the gripper's /user: the web page\n"
              "lists, uploads, runs and deletes the\n"
              "scripts in DIR (default none)"},
+    /* Uploads alone fill the directory: bounds on what they may fill it
+     * with, far above what a gripper's scripts need. */
+    {.name = "script-quota",
+     .type = WSG_SETTING_UINT,
+     .at = WSG_AT(script_quota),
+     .min = 0,
+     .max = 4294967295.0,
+     .unit = "bytes",
+     .def = "16777216",
+     .section = WSG_SECTION_GRIPPER,
+     .arg = "BYTES",
+     .help = "the script directory's scripts may\n"
+             "take BYTES in all after an upload\n"
+             "({range}, default {default})"},
+    {.name = "script-files",
+     .type = WSG_SETTING_UINT,
+     .at = WSG_AT(script_files),
+     .min = 0,
+     .max = WSG_SCRIPT_FILES_MAX,
+     .def = "256",
+     .section = WSG_SECTION_GRIPPER,
+     .arg = "N",
+     .help = "scripts the directory may hold after\n"
+             "an upload ({range}, default {default})"},
     {.name = "script-memory",
      .type = WSG_SETTING_UINT,
      .at = WSG_AT(script_memory),
@@ -786,6 +810,21 @@ static const struct wsg_setting settings[] = {
      .help = "communication log: one line per\n"
              "packet and per event; '-' for\n"
              "stderr; SIGHUP opens FILE again"},
+    /* A log nobody rotates must not fill the disk: a bound by default,
+     * generous for a day of a busy test rig. */
+    {.name = "log-max",
+     .type = WSG_SETTING_UINT,
+     .at = WSG_AT(log_max),
+     .min = 0,
+     .max = 4294967295.0,
+     .unit = "bytes",
+     .def = "67108864",
+     .section = WSG_SECTION_EMULATOR,
+     .arg = "BYTES",
+     .help = "at BYTES the log FILE is moved to\n"
+             "FILE.old (replacing it) and a new\n"
+             "one begins ({range}, default\n"
+             "{default}; 0: no bound)"},
     {.name = "config",
      .type = WSG_SETTING_CONFIG,
      .at = WSG_AT(config_path),
@@ -828,6 +867,30 @@ const struct wsg_setting *wsg_options_settings(size_t *count)
     return settings;
 }
 
+/* No value of any setting holds a control character (a newline, a
+ * carriage return, a tab, ESC, DEL): a path with a newline in it would
+ * write a line of its own into the config file that the web page saves,
+ * and into every message that shows it. Checked here, so the command
+ * line, the config file and the web page all refuse it alike. The value
+ * itself is not shown: the message would carry what it refuses. */
+static int control_free(const char *val, char *err, size_t errcap)
+{
+    size_t i;
+
+    for (i = 0; val[i]; i++) {
+        unsigned char ch = (unsigned char)val[i];
+
+        if (ch < 0x20 || ch == 0x7F) {
+            snprintf(err, errcap,
+                     "a control character (byte 0x%02X at %lu) is not "
+                     "allowed in a value",
+                     ch, (unsigned long)i + 1);
+            return -EINVAL;
+        }
+    }
+    return 0;
+}
+
 /* Apply one setting. val is its text (an argument, a file's value, the
  * default), or NULL for a flag on the command line (--no-crc). line is 0
  * for the command line and the defaults. On error, err gets the reason
@@ -841,6 +904,8 @@ static int apply(struct wsg_options *o, const struct wsg_setting *s,
     char r[64];
     const char *k;
 
+    if (val && control_free(val, err, errcap) < 0)
+        return -EINVAL;
     switch (s->type) {
     case WSG_SETTING_UINT:
         if (parse_uint(val, (unsigned long)s->max, &u) < 0 || u < s->min)
@@ -1007,7 +1072,9 @@ static void usage(FILE *f)
           "  tcp = 127.0.0.1:1000\n"
           "  acceleration = 200\n"
           "  tag = cell 4\n"
-          "Errors name the file and line; bad settings exit with status 2.\n"
+          "No value, here or on the command line, may hold a control\n"
+          "character (newline, tab, ESC, ...). Errors name the file and\n"
+          "line; bad settings exit with status 2.\n"
           "\n"
           "When every interface is open, one line is printed on stdout:\n"
           "  ready tcp=ADDR:PORT udp=ADDR:PORT>REMOTE pty=PATH can=IFACE:ID\n"

@@ -37,6 +37,8 @@
 /* --grippers: a fleet in one process. The ceiling is generous for a CI
  * farm's box; descriptors (a few per gripper) run out well before it. */
 #define WSG_GRIPPERS_MAX 10000u
+/* --script-files: what the page lists at most. */
+#define WSG_SCRIPT_FILES_MAX 1024u
 /* Room for a pty path with a fleet's number counted into it. */
 #define WSG_OPTIONS_PATH_MAX 4096u
 /* Room for the names --web-host lists, comma-separated. */
@@ -75,6 +77,7 @@ struct wsg_options {
     struct wsg_endpoint web;     /* the web page (loopback default) */
     double time_scale;           /* simulated seconds per real second */
     const char *log_path;        /* NULL: no log; "-": stderr */
+    uint32_t log_max;            /* --log-max: bytes a log file may reach */
     const char *config_path;     /* --config FILE, read before the options */
     struct wsg_model_value initial_part; /* --part WIDTH */
     double initial_part_stiffness;       /* N/mm; 0: the model's default */
@@ -93,6 +96,8 @@ struct wsg_options {
     const char *script_path; /* --script FILE: the startup script */
     uint32_t script_memory;  /* --script-memory MiB */
     const char *script_dir;  /* --script-dir DIR: the page's; NULL: none */
+    uint32_t script_quota;   /* --script-quota: bytes of uploaded scripts */
+    uint32_t script_files;   /* --script-files: scripts the page may hold */
     const char *model;       /* NULL: the default model */
     /* The web page's settings, the model's defaults unless given. */
     struct wsg_model_value acceleration; /* mm/s^2 */

@@ -7,7 +7,7 @@
  * that is. The memory cap is the allocator's; preemption is a count hook
  * that yields the body when its slice is used up.
  */
-#define _GNU_SOURCE /* realpath, O_NOFOLLOW */
+#define _GNU_SOURCE /* realpath, O_NOFOLLOW, openat */
 
 #include "script_impl.h"
 
@@ -315,34 +315,74 @@ void wsg_script_free(struct wsg_script *h)
     free(h);
 }
 
-int wsg_script_loadfile(lua_State *L, const char *path)
+/* A compile error of a file outside the script directory, made safe to
+ * show: that file may be any the daemon can read (a private key), and
+ * Lua's message quotes the text where the parse failed ("near '...'") or
+ * a name of the file's. What stays is the file, the line and Lua's words
+ * before anything quoted. The line comes from a second parse under the
+ * empty name "=", whose message starts ":LINE:" whatever the file's
+ * name holds. Replaces the message on top of L. */
+static void syntax_unquoted(lua_State *L, const char *buf, size_t len,
+                            const char *name)
+{
+    char words[128];
+    unsigned long line = 0;
+    const char *m = NULL;
+    size_t n = 0;
+    int st;
+
+    st = luaL_loadbufferx(L, buf, len, "=", "t");
+    if (st == LUA_ERRSYNTAX)
+        m = lua_tostring(L, -1);
+    if (m && m[0] != ':') {
+        /* No position: the loader's own words (a binary chunk refused),
+         * none of the file's. Lua's message stays. */
+        lua_pop(L, 1);
+        return;
+    }
+    if (m) {
+        char *end;
+
+        line = strtoul(m + 1, &end, 10);
+        m = *end == ':' ? end + 1 : "";
+        while (*m == ' ')
+            m++;
+        /* Up to a quote, a "<name>"-like token, " near " or " (". */
+        while (m[n] && n < sizeof words - 1 && !strchr("'\"<", m[n]) &&
+               strncmp(m + n, " near ", 6) != 0 &&
+               strncmp(m + n, " (", 2) != 0)
+            n++;
+        while (n > 0 && (m[n - 1] == ' ' || m[n - 1] == ':'))
+            n--;
+        memcpy(words, m, n);
+    }
+    words[n] = '\0';
+    lua_pop(L, 2); /* the second parse's result, and Lua's message */
+    lua_pushfstring(L,
+                    "%s:%d: %s (the file's text is not shown: it is not in "
+                    "the script directory)",
+                    name, (int)line, n ? words : "syntax error");
+}
+
+/* Load the Lua text read from fd as a function on L's stack, named
+ * "@name". As wsg_script_loadfile, from a descriptor already open. */
+static int load_fd(lua_State *L, int fd, const char *name)
 {
     struct stat st;
     size_t len = 0, skip = 0;
     char *buf = NULL;
     ssize_t n;
-    int fd, r;
+    int r;
 
-    fd = open(path, O_RDONLY | O_NOFOLLOW | O_CLOEXEC);
-    if (fd < 0)
+    if (fstat(fd, &st) < 0)
         return -errno;
-    if (fstat(fd, &st) < 0) {
-        r = -errno;
-        goto out;
-    }
-    if (!S_ISREG(st.st_mode)) {
-        r = -EINVAL;
-        goto out;
-    }
-    if (st.st_size > (off_t)WSG_SCRIPT_SOURCE_MAX) {
-        r = -EFBIG;
-        goto out;
-    }
+    if (!S_ISREG(st.st_mode))
+        return -EINVAL;
+    if (st.st_size > (off_t)WSG_SCRIPT_SOURCE_MAX)
+        return -EFBIG;
     buf = malloc((size_t)st.st_size + 1);
-    if (!buf) {
-        r = -ENOMEM;
-        goto out;
-    }
+    if (!buf)
+        return -ENOMEM;
     /* What the file holds now, even if it grew since fstat. */
     while (len < (size_t)st.st_size &&
            (n = read(fd, buf + len, (size_t)st.st_size - len)) != 0) {
@@ -359,18 +399,32 @@ int wsg_script_loadfile(lua_State *L, const char *path)
     if (len && buf[0] == '#')
         while (skip < len && buf[skip] != '\n')
             buf[skip++] = ' ';
-    lua_pushfstring(L, "@%s", path);
+    lua_pushfstring(L, "@%s", name);
     r = luaL_loadbufferx(L, buf, len, lua_tostring(L, -1), "t");
     lua_remove(L, -2); /* the name */
+    if (r == LUA_ERRSYNTAX && !wsg_script_of(L)->quote)
+        syntax_unquoted(L, buf, len, name);
 out:
     free(buf);
+    return r;
+}
+
+int wsg_script_loadfile(lua_State *L, const char *path)
+{
+    int fd, r;
+
+    fd = open(path, O_RDONLY | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC);
+    if (fd < 0)
+        return -errno;
+    r = load_fd(L, fd, path);
     close(fd);
     return r;
 }
 
-/* Load the file as the body of a fresh state. 0, or -errno/-EINVAL with
- * the reason in err (a compile error fails the script). */
-static int script_load(struct wsg_script *h, char *err, size_t errlen)
+/* Load the file (read from fd) as the body of a fresh state. 0, or
+ * -errno/-EINVAL with the reason in err (a compile error fails the
+ * script). */
+static int script_load(struct wsg_script *h, int fd, char *err, size_t errlen)
 {
     int st;
 
@@ -386,7 +440,7 @@ static int script_load(struct wsg_script *h, char *err, size_t errlen)
     h->co = lua_newthread(h->L);
     /* Kept in the registry so the collector leaves it while it runs. */
     lua_setfield(h->L, LUA_REGISTRYINDEX, "wsg.body");
-    st = wsg_script_loadfile(h->co, h->file);
+    st = load_fd(h->co, fd, h->file);
     if (st != LUA_OK) {
         const char *m = st > 0 ? lua_tostring(h->co, -1) : NULL;
 
@@ -405,11 +459,89 @@ static int script_load(struct wsg_script *h, char *err, size_t errlen)
     return 0;
 }
 
-int wsg_script_start(struct wsg_script *h, const char *path, char *err,
-                     size_t errlen)
+int wsg_script_open_at(int dfd, const char *name)
+{
+    struct stat st;
+    int fd;
+
+    /* O_NONBLOCK: a FIFO planted in the script's place must not hold the
+     * daemon in open(); it is refused below like any other non-file. */
+    fd = openat(dfd, name,
+                O_RDONLY | O_NOFOLLOW | O_NONBLOCK | O_NOCTTY | O_CLOEXEC);
+    if (fd < 0)
+        return -errno;
+    if (fstat(fd, &st) < 0) {
+        int r = -errno;
+
+        close(fd);
+        return r;
+    }
+    if (!S_ISREG(st.st_mode)) {
+        close(fd);
+        return -ENOEXEC;
+    }
+    return fd;
+}
+
+int wsg_script_open(const char *path, char *file, size_t cap)
+{
+    char dir[WSG_SCRIPT_PATH_MAX], real[WSG_SCRIPT_PATH_MAX];
+    const char *slash = strrchr(path, '/'), *name = slash ? slash + 1 : path;
+    size_t n = slash ? (size_t)(slash - path) : 0;
+    int dfd, fd;
+
+    if (*name == '\0')
+        return -EISDIR;
+    if (n >= sizeof dir)
+        return -ENAMETOOLONG;
+    /* The directory as given ("" is the root, none the current one). */
+    memcpy(dir, slash ? path : ".", slash ? n : 1);
+    dir[slash ? n : 1] = '\0';
+    if (!realpath(dir[0] ? dir : "/", real))
+        return -errno;
+    dfd = open(real, O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+    if (dfd < 0)
+        return -errno;
+    fd = wsg_script_open_at(dfd, name);
+    close(dfd);
+    if (fd >= 0 && file &&
+        (size_t)snprintf(file, cap, "%s/%s", strcmp(real, "/") ? real : "",
+                         name) >= cap) {
+        close(fd);
+        return -ENAMETOOLONG;
+    }
+    return fd;
+}
+
+const char *wsg_script_open_strerror(int r)
+{
+    if (r == -ELOOP)
+        return "a symbolic link (not followed)";
+    if (r == -ENOEXEC)
+        return "not a regular file";
+    return strerror(-r);
+}
+
+/* Is the script's directory (h->dir) the script directory, or below it?
+ * Then its compile errors may quote its text. */
+static int in_script_dir(const struct wsg_script *h)
+{
+    char top[WSG_SCRIPT_PATH_MAX], dir[WSG_SCRIPT_PATH_MAX];
+    size_t n;
+
+    if (!h->cfg.script_dir || !realpath(h->cfg.script_dir, top) ||
+        !realpath(h->dir, dir))
+        return 0;
+    n = strlen(top);
+    if (strcmp(top, "/") == 0)
+        return 1;
+    return strncmp(dir, top, n) == 0 && (dir[n] == '\0' || dir[n] == '/');
+}
+
+int wsg_script_start_fd(struct wsg_script *h, int fd, const char *file,
+                        char *err, size_t errlen)
 {
     char *slash;
-    FILE *f;
     int r;
 
     if (h->L) {
@@ -417,18 +549,20 @@ int wsg_script_start(struct wsg_script *h, const char *path, char *err,
                  h->file);
         return -EBUSY;
     }
-    if (!realpath(path, h->file) || !(f = fopen(h->file, "r"))) {
-        r = -errno;
-        snprintf(err, errlen, "%s: %s", path, strerror(errno));
+    if ((size_t)snprintf(h->file, sizeof h->file, "%s", file) >=
+        sizeof h->file) {
+        snprintf(err, errlen, "the script's path is too long");
         h->file[0] = '\0';
-        return r;
+        return -ENAMETOOLONG;
     }
-    fclose(f);
     /* Its modules are beside it: the gripper's /user directory. */
     snprintf(h->dir, sizeof h->dir, "%s", h->file);
     slash = strrchr(h->dir, '/');
     if (slash)
         slash[slash == h->dir ? 1 : 0] = '\0';
+    else
+        snprintf(h->dir, sizeof h->dir, ".");
+    h->quote = in_script_dir(h);
     if (!h->tx) {
         h->tx = malloc(WSG_HEADER_LEN + WSG_SCRIPT_SEND_MAX + WSG_CRC_LEN);
         if (!h->tx) {
@@ -446,7 +580,7 @@ int wsg_script_start(struct wsg_script *h, const char *path, char *err,
     h->qlen = 0;
     h->reply_tag = 0;
     h->dev->ext_flags |= WSG_SF_SCRIPT_RUNNING;
-    r = script_load(h, err, errlen);
+    r = script_load(h, fd, err, errlen);
     if (r < 0) {
         if (r != -EINVAL)
             script_end(h, err);
@@ -458,6 +592,27 @@ int wsg_script_start(struct wsg_script *h, const char *path, char *err,
         return -EINVAL;
     }
     return 0;
+}
+
+int wsg_script_start(struct wsg_script *h, const char *path, char *err,
+                     size_t errlen)
+{
+    char file[WSG_SCRIPT_PATH_MAX];
+    int fd, r;
+
+    if (h->L) {
+        snprintf(err, errlen, "a script is running (%s): stop it first",
+                 h->file);
+        return -EBUSY;
+    }
+    fd = wsg_script_open(path, file, sizeof file);
+    if (fd < 0) {
+        snprintf(err, errlen, "%s: %s", path, wsg_script_open_strerror(fd));
+        return fd == -EINVAL ? -EIO : fd;
+    }
+    r = wsg_script_start_fd(h, fd, file, err, errlen);
+    close(fd);
+    return r;
 }
 
 int wsg_script_stop(struct wsg_script *h)

@@ -55,6 +55,10 @@ struct wsg_script_config {
      * what else is ready. Required. */
     void (*wake)(void *ctx);
     void *ctx;
+    /* The script directory (--script-dir); NULL: none. A script outside
+     * it (and its modules) may be any file the daemon can read: a compile
+     * error then names its line and Lua's words, never its text. */
+    const char *script_dir;
 };
 
 enum wsg_script_state {
@@ -86,12 +90,31 @@ int wsg_script_new(struct wsg_script **out, struct wsg_device *d,
 void wsg_script_free(struct wsg_script *h);
 
 /* Run the script in file path: it starts at once and runs until it first
- * waits. -EBUSY while one runs (one at a time, as on the gripper);
- * -errno when the file cannot be read; -EINVAL when it does not compile or
+ * waits. The file is opened as wsg_script_open opens it. -EBUSY while one
+ * runs (one at a time, as on the gripper); -errno when the file cannot be
+ * opened or read (wsg_script_open's); -EINVAL when it does not compile or
  * fails before it first waits (it has failed then: D20, the error kept).
  * A reason goes to err either way. */
 int wsg_script_start(struct wsg_script *h, const char *path, char *err,
                      size_t errlen);
+/* The same with the script read from fd, an open regular file (the
+ * caller keeps and closes it), named file (its modules are found in
+ * file's directory): what was opened is what runs, with no path looked up
+ * again between a check and the run. */
+int wsg_script_start_fd(struct wsg_script *h, int fd, const char *file,
+                        char *err, size_t errlen);
+/* Open a script's file for reading the way wsg_script_start does: path's
+ * directory resolved (realpath), the file opened relative to it in one
+ * step without following a symbolic link (O_NOFOLLOW), and only a regular
+ * file kept (a FIFO does not block the open). Returns the descriptor, or
+ * -errno: -ELOOP for a link, -ENOEXEC for what is not a regular file.
+ * file (if not NULL) gets the resolved path, DIR/NAME. */
+int wsg_script_open(const char *path, char *file, size_t cap);
+/* The same for name relative to the directory open as dfd. */
+int wsg_script_open_at(int dfd, const char *name);
+/* Words for wsg_script_open's -errno ("a symbolic link (not followed)",
+ * "not a regular file", else strerror's). */
+const char *wsg_script_open_strerror(int r);
 /* End the running script: its IDs are unregistered, a speed-mode motion
  * it left running is stopped. 0, or -ESRCH when none runs. */
 int wsg_script_stop(struct wsg_script *h);

@@ -34,6 +34,7 @@ struct wsg_script {
     char error[512];
     char file[WSG_SCRIPT_PATH_MAX];
     char dir[WSG_SCRIPT_PATH_MAX];
+    int quote; /* compile errors may quote the text: in the script dir */
     size_t memory;
     size_t limit;    /* what the allocator allows: the cap, or past it */
     uint32_t budget; /* instructions left in this slice */

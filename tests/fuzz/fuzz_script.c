@@ -1253,7 +1253,7 @@ static void fb_sess_close(int i)
 
 static void fb_begin(uint8_t cfg)
 {
-    struct wsg_script_config sc = {FB_MEMORY, NULL, fb_wake, NULL};
+    struct wsg_script_config sc = {FB_MEMORY, NULL, fb_wake, NULL, NULL};
     struct wsg_axis_config ac;
     int i;
 

@@ -300,6 +300,20 @@ const struct emu_transport *emu_transport_arg(int argc, char **argv)
     exit(2);
 }
 
+int emu_spawn(struct emu *e, const char *exe, const char *const *args)
+{
+    memset(e, 0, sizeof(*e));
+    e->tp_fd = -1;
+    e->out_fd = -1;
+    e->pid = spawn(exe, args, &e->out_fd, NULL);
+    if (e->pid < 0) {
+        fprintf(stderr, "emu: cannot start %s: %s\n", exe, strerror(errno));
+        e->pid = 0;
+        return -1;
+    }
+    return 0;
+}
+
 static int start(struct emu *e, const char *exe, const char *const *args)
 {
     e->out_fd = -1;
@@ -308,7 +322,11 @@ static int start(struct emu *e, const char *exe, const char *const *args)
         fprintf(stderr, "emu: cannot start %s: %s\n", exe, strerror(errno));
         return -1;
     }
+    return emu_ready(e);
+}
 
+int emu_ready(struct emu *e)
+{
     /* Read until the first newline; bytes after it are kept in extra. */
     double deadline = emu_now_ms() + EMU_READY_MS;
     size_t n = 0;

@@ -78,6 +78,12 @@ struct emu {
  * wait up to EMU_READY_MS for the ready line. Returns 0, or -1 with a
  * message on stderr (the child is then reaped). */
 int emu_start(struct emu *e, const char *exe, const char *const *args);
+/* The two halves of emu_start, for a test that acts on the daemon while
+ * it starts: emu_spawn starts it (0, or -1 with a message) and returns at
+ * once; emu_ready waits up to EMU_READY_MS for its ready line (0, or -1
+ * with a message: the child is then killed and reaped). */
+int emu_spawn(struct emu *e, const char *exe, const char *const *args);
+int emu_ready(struct emu *e);
 /* Start with the interface of tp (its daemon_args) followed by extra
  * (NULL-terminated, may be NULL). Exits 77 when tp cannot run here. */
 int emu_start_tp(struct emu *e, const char *exe,

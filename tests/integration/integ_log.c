@@ -17,6 +17,14 @@
  * acknowledges, and the control commands that changed the world each show
  * as an "event" line. On SIGHUP the daemon opens the file again at its
  * path: after a rename (logrotate), new lines go to a new file there.
+ *
+ * A size bound (--log-max): the file never passes it; at the bound it
+ * moves to FILE.old and the newest lines go on in FILE, whole lines in
+ * both; 0 is no bound.
+ *
+ * Signals from the very start: a SIGHUP sent while the daemon still reads
+ * its options does not kill it (it reaches its ready line and serves), a
+ * SIGTERM then ends it with status 0 rather than by the signal.
  */
 /* mkdtemp, fdopen, kill */
 #define _POSIX_C_SOURCE 200809L
@@ -25,6 +33,7 @@
 #include "emu.h"
 #include "emu_ctl.h"
 
+#include <fcntl.h>
 #include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -368,6 +377,132 @@ static void test_reopen(const char *dir)
     unlink(old);
 }
 
+/* Whole lines, each starting with the wall clock: 1, or 0. */
+static int whole_lines(const char *text)
+{
+    const char *p = text;
+
+    while (*p) {
+        const char *end = strchr(p, '\n');
+
+        if (!end || end - p < 20 || p[2] != ':' || p[5] != ':')
+            return 0;
+        p = end + 1;
+    }
+    return 1;
+}
+
+/* --log-max BYTES: the file never passes BYTES; at the bound it becomes
+ * FILE.old (whole lines in both) and the newest lines are in FILE. With
+ * 0 there is no bound. */
+static void test_bound(const char *dir)
+{
+    char path[512], old[600], text[65536], payload[8];
+    const char *args[] = {"--tcp",     "127.0.0.1:0", "--log", path,
+                          "--log-max", "2000",        NULL};
+    const char *const last[] = {" in 06h Loop data=6C 61 73 74", NULL};
+    struct emu e;
+    struct emu_client c;
+    struct stat st;
+    char line[1024];
+    long n, total = 0;
+    int i;
+
+    snprintf(path, sizeof path, "%s/bound.log", dir);
+    snprintf(old, sizeof old, "%s.old", path);
+    REQUIRE(emu_start(&e, exe, args) == 0);
+    REQUIRE(emu_open(&c, &e, &emu_tcp) == 0);
+    /* Some 200 lines of about 90 bytes: the bound is passed many times. */
+    for (i = 0; i < 100; i++) {
+        snprintf(payload, sizeof payload, "%04d", i);
+        CHECK_EQ(emu_request(&c, WSG_CMD_LOOP, payload, 4, NULL, EMU_REPLY_MS),
+                 WSG_E_SUCCESS);
+    }
+    CHECK_EQ(emu_request(&c, WSG_CMD_LOOP, "last", 4, NULL, EMU_REPLY_MS),
+             WSG_E_SUCCESS);
+    emu_close(&c);
+    CHECK_EQ(emu_stop(&e), 0);
+    REQUIRE(stat(path, &st) == 0);
+    CHECK(st.st_size > 0 && st.st_size <= 2000);
+    n = emu_slurp(path, text, sizeof text);
+    CHECK(n > 0 && whole_lines(text));
+    total += n;
+    /* The newest lines are in the file, the last request among them. */
+    CHECK(find_line(text, last, line, sizeof line) != NULL);
+    REQUIRE(stat(old, &st) == 0);
+    CHECK(st.st_size > 0 && st.st_size <= 2000);
+    n = emu_slurp(old, text, sizeof text);
+    CHECK(n > 0 && whole_lines(text));
+    total += n;
+    /* Between the bound and twice it kept, no more. */
+    CHECK(total > 2000 && total <= 4000);
+    unlink(path);
+    unlink(old);
+
+    /* 0: no bound, nothing moved aside. */
+    args[5] = "0";
+    REQUIRE(emu_start(&e, exe, args) == 0);
+    REQUIRE(emu_open(&c, &e, &emu_tcp) == 0);
+    for (i = 0; i < 100; i++)
+        CHECK_EQ(emu_request(&c, WSG_CMD_LOOP, "abcd", 4, NULL, EMU_REPLY_MS),
+                 WSG_E_SUCCESS);
+    emu_close(&c);
+    CHECK_EQ(emu_stop(&e), 0);
+    REQUIRE(stat(path, &st) == 0);
+    CHECK(st.st_size > 4000);
+    CHECK(stat(old, &st) != 0);
+    unlink(path);
+}
+
+/* A signal that comes while the daemon is still reading its options: it
+ * waits for the event loop instead of taking its default action (death).
+ * The config file is a FIFO, so the daemon is held inside its option
+ * parsing, past the dynamic loader, until the test has sent the signal:
+ * no race with the daemon's start. SIGHUP (logrotate's) must leave it
+ * running to its ready line and serving; SIGTERM must end it cleanly
+ * (status 0), not kill it. */
+static void early_signal(const char *dir, int sig)
+{
+    char fifo[512];
+    const char *args[] = {"--config", fifo, NULL};
+    static const char text[] = "tcp = 127.0.0.1:0\n";
+    struct emu e;
+    struct emu_client c;
+    int fd, st;
+
+    snprintf(fifo, sizeof fifo, "%s/early.conf", dir);
+    REQUIRE(mkfifo(fifo, 0600) == 0);
+    REQUIRE(emu_spawn(&e, exe, args) == 0);
+    /* Opened for writing once the daemon opened it for reading: it is in
+     * main() then, reading its options. */
+    fd = open(fifo, O_WRONLY);
+    unlink(fifo);
+    REQUIRE(fd >= 0);
+    REQUIRE(kill(e.pid, sig) == 0);
+    CHECK_EQ(write(fd, text, sizeof text - 1), (ssize_t)(sizeof text - 1));
+    close(fd);
+    if (sig == SIGHUP) {
+        REQUIRE(emu_ready(&e) == 0);
+        REQUIRE(emu_open(&c, &e, &emu_tcp) == 0);
+        CHECK_EQ(emu_request(&c, WSG_CMD_LOOP, "hup", 3, NULL, EMU_REPLY_MS),
+                 WSG_E_SUCCESS);
+        emu_close(&c);
+        CHECK_EQ(emu_stop(&e), 0);
+    } else {
+        /* The ready line, then the stop the signal asked for. */
+        st = emu_ready(&e);
+        CHECK_EQ(st, 0);
+        if (st == 0)
+            CHECK_EQ(emu_stop_sig(&e, 0), 0);
+    }
+}
+
+static void test_early_signals(const char *dir)
+{
+    early_signal(dir, SIGTERM);
+    early_signal(dir, SIGHUP);
+}
+
 static void test_bad_log(void)
 {
     static const char *const args[] = {"--tcp", "127.0.0.1:0", "--log",
@@ -393,6 +528,8 @@ int main(int argc, char **argv)
     test_log(dir);
     test_events(dir);
     test_reopen(dir);
+    test_bound(dir);
+    test_early_signals(dir);
     test_bad_log();
     rmdir(dir);
     TEST_EXIT();

@@ -43,6 +43,10 @@
  * - lockstep: a script sleeping 10 ms in a loop has counted exactly 100
  *   after 1000 ms of steps, on every run, and socket.gettime() is the
  *   stepped time exactly;
+ * - outside: a file outside the script directory that does not compile
+ *   (a key run by path) fails with its name and line, and none of its
+ *   text, in the run's answer, the status, the output and the startup
+ *   message; inside the script directory Lua's message is whole;
  * - startup: --script registers its IDs before the ready line, a missing
  *   file is exit status 1, a syntax error leaves the daemon running with
  *   D20.
@@ -54,9 +58,12 @@
 #include "emu_ctl.h"
 #include "wsg/axis.h"
 
+#include <arpa/inet.h>
+#include <netinet/in.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/socket.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -1596,6 +1603,91 @@ static void part_lockstep(const char *exe)
     CHECK_EQ(emu_stop(&e), 0);
 }
 
+/* ---- part outside ---- */
+
+/* A file that is no script, such as a key, run by path: it does not
+ * compile, and Lua's error would quote the text where the parse failed.
+ * Outside the script directory the error names the file and the line,
+ * in the answer, the status, the output and the startup's message, but
+ * none of the file's text; the same file inside the script directory
+ * gets Lua's message in full. */
+static void part_outside(const char *exe)
+{
+    static const char secret[] = "hunter2 s3cr3t-passw0rd\n";
+    char top[] = "/tmp/wsgemu-outside.XXXXXX";
+    char user[128], key[160], inside[160], out[512], err[2048];
+    const char *args[] = {"--tcp",       "127.0.0.1:0",  "--control",
+                          "127.0.0.1:0", "--script-dir", user,
+                          NULL};
+    const char *ans;
+    struct emu e;
+    struct ctl k;
+    FILE *f;
+
+    REQUIRE(mkdtemp(top) != NULL);
+    snprintf(user, sizeof user, "%s/user", top);
+    snprintf(key, sizeof key, "%s/key.pem", top);
+    snprintf(inside, sizeof inside, "%s/key.lua", user);
+    REQUIRE(mkdir(user, 0700) == 0);
+    f = fopen(key, "w");
+    REQUIRE(f && fputs(secret, f) >= 0 && fclose(f) == 0);
+    f = fopen(inside, "w");
+    REQUIRE(f && fputs(secret, f) >= 0 && fclose(f) == 0);
+
+    REQUIRE(emu_start(&e, exe, args) == 0);
+    REQUIRE(ctl_open(&k, &e) == 0);
+    ans = run_script(&k, key);
+    CHECK_HAS(ans, "error script: ");
+    CHECK_HAS(ans, "key.pem:1: ");
+    CHECK(strstr(ans, "s3cr3t") == NULL && strstr(ans, "hunter2") == NULL);
+    ans = script_status(&k);
+    CHECK_HAS(ans, "\"failed\":true,");
+    CHECK_HAS(ans, "key.pem:1: ");
+    CHECK(strstr(ans, "s3cr3t") == NULL && strstr(ans, "hunter2") == NULL);
+    ans = script_output(&k, 0);
+    CHECK_HAS(ans, "key.pem:1: ");
+    CHECK(strstr(ans, "s3cr3t") == NULL && strstr(ans, "hunter2") == NULL);
+
+    /* In the script directory: Lua's words and where, in full. */
+    ans = run_script(&k, inside);
+    CHECK_HAS(ans, "key.lua:1: ");
+    CHECK_HAS(ans, "near 's3cr3t'");
+    ctl_close(&k);
+    CHECK_EQ(emu_stop(&e), 0);
+
+    /* The same as the startup script: its message on stderr has no text
+     * of the file either. The control channel's port is taken, so the
+     * daemon ends by itself (status 1) once the script has run. */
+    {
+        struct sockaddr_in sa;
+        socklen_t len = sizeof sa;
+        char port[32];
+        const char *start[] = {"--tcp",     "127.0.0.1:0", "--script", key,
+                               "--control", port,          NULL};
+        int fd = socket(AF_INET, SOCK_STREAM, 0);
+
+        memset(&sa, 0, sizeof sa);
+        sa.sin_family = AF_INET;
+        sa.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+        REQUIRE(fd >= 0 && bind(fd, (struct sockaddr *)&sa, sizeof sa) == 0 &&
+                listen(fd, 1) == 0 &&
+                getsockname(fd, (struct sockaddr *)&sa, &len) == 0);
+        snprintf(port, sizeof port, "127.0.0.1:%u",
+                 (unsigned)ntohs(sa.sin_port));
+        CHECK_EQ(emu_run(exe, start, EMU_READY_MS, out, sizeof out, err,
+                         sizeof err),
+                 1);
+        close(fd);
+        CHECK_HAS(err, "key.pem:1: ");
+        CHECK(strstr(err, "s3cr3t") == NULL && strstr(err, "hunter2") == NULL);
+    }
+
+    unlink(key);
+    unlink(inside);
+    rmdir(user);
+    rmdir(top);
+}
+
 /* ---- part startup ---- */
 
 static void part_startup(const char *exe)
@@ -1685,6 +1777,10 @@ int main(int argc, char **argv)
     }
     if (all || strcmp(part, "lockstep") == 0) {
         part_lockstep(exe);
+        ran++;
+    }
+    if (all || strcmp(part, "outside") == 0) {
+        part_outside(exe);
         ran++;
     }
     if (all || strcmp(part, "startup") == 0) {

@@ -18,6 +18,8 @@
  *   wherever --config stands on the command line;
  * - bad values exit 2 naming the valid range; a bad file line exits 2
  *   naming FILE:LINE;
+ * - a value with a control character (a newline, a tab, ESC, DEL) is
+ *   refused for every text setting, on the command line and in the file;
  * - --can's ID is decimal (leading zeros too: 010 is ten, 08 eight) or 0x
  *   hex, nothing else (no blanks, signs, octal or other prefixes).
  */
@@ -362,6 +364,30 @@ static void test_bad_files(void)
     bad_file("no-crc = perhaps\n", "1: no-crc");
 }
 
+/* No value holds a control character, whatever the setting and wherever
+ * it comes from: a text setting (paths, names) on the command line and in
+ * the file alike. */
+static void test_control_chars(void)
+{
+    static const char *const script[] = {"--script", "/tmp/a\nlog = /tmp/b",
+                                         NULL};
+    static const char *const log[] = {"--log", "/nonexistent/x\ry", NULL};
+    static const char *const pty[] = {"--pty", "/nonexistent/tty\tWSG", NULL};
+    static const char *const model[] = {"--model", "wsg50\x1b", NULL};
+    static const char *const dir[] = {"--script-dir", "/nonexistent/d\x7f",
+                                      NULL};
+
+    bad(script, "--script: a control character (byte 0x0A at 7)");
+    bad(log, "--log: a control character (byte 0x0D");
+    bad(pty, "--pty: a control character (byte 0x09");
+    bad(model, "--model: a control character (byte 0x1B");
+    bad(dir, "--script-dir: a control character (byte 0x7F");
+    bad_file("script = /tmp/x\x1b[2Jy.lua\n",
+             "1: script: a control character (byte 0x1B");
+    bad_file("\nlog = /tmp/\x01x.log\n",
+             "2: log: a control character (byte 0x01");
+}
+
 /* --can IFACE:ID with ID given as id is read as the ID shown. Without a
  * CAN bus here the value shows in the error of a fleet too large for it:
  * 1024 grippers from ID take IDs up to ID + 2047, past 0x7FF for every ID
@@ -412,6 +438,7 @@ int main(int argc, char **argv)
     test_version();
     test_bad_values();
     test_bad_files();
+    test_control_chars();
     test_can_id();
     TEST_EXIT();
 }

@@ -10,9 +10,15 @@
  *   packet with a wrong checksum, error state on disconnect off leaves no
  *   FAST STOP after a close without 07h, the text interface makes the
  *   next TCP connection speak GCL;
+ * - the startup script: a path with a line break (in a directory's name)
+ *   is refused and nothing of it is saved to the config file; it is
+ *   checked as the start opens it, with one message for a missing path, a
+ *   directory, a FIFO and a link alike;
  * - save=1 rewrites the config file (comments kept, lines replaced in
  *   place, missing keys appended) and a daemon started with it has the
  *   values; without --config, save=1 is refused and nothing changes;
+ *   a config file that is a symbolic link or read-only is refused (409)
+ *   and left as it was; a saved file keeps its mode and owner;
  * - POST /motion: a move before homing is E_NOT_INITIALIZED (409); home,
  *   move, jog, grasp (with its force limit), release and stop move the
  *   gripper as 43h and 41h show;
@@ -31,6 +37,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #ifndef WSG_TEST_HAVE_WEB
@@ -310,6 +317,141 @@ static void test_forms(struct emu_client *c)
     CHECK_NEAR(setting(ans.body, "acceleration"), 500.0, 1e-9);
 }
 
+/* s as a form value: every byte but letters and digits as %XX. */
+static void form_value(char *out, size_t cap, const char *s)
+{
+    static const char hex[] = "0123456789ABCDEF";
+    size_t n = 0;
+
+    for (; *s && n + 4 < cap; s++) {
+        unsigned char ch = (unsigned char)*s;
+
+        if ((ch >= 'a' && ch <= 'z') || (ch >= 'A' && ch <= 'Z') ||
+            (ch >= '0' && ch <= '9')) {
+            out[n++] = (char)ch;
+        } else {
+            out[n++] = '%';
+            out[n++] = hex[ch >> 4];
+            out[n++] = hex[ch & 15];
+        }
+    }
+    out[n] = '\0';
+}
+
+/* The error of a POST, with every copy of path in it cut out: what it
+ * says of any path alike. */
+static void error_without(const char *path, char *out, size_t cap)
+{
+    const char *p = ans.body, *at;
+    size_t n = 0, k;
+
+    while ((at = strstr(p, path)) != NULL && n < cap - 1) {
+        k = (size_t)(at - p);
+        if (k > cap - 1 - n)
+            k = cap - 1 - n;
+        memcpy(out + n, p, k);
+        n += k;
+        p = at + strlen(path);
+    }
+    k = strlen(p);
+    if (k > cap - 1 - n)
+        k = cap - 1 - n;
+    memcpy(out + n, p, k);
+    out[n + k] = '\0';
+}
+
+/* The startup script (the script setting) from the page:
+ * - a path with a line break in a directory's name (a readable file
+ *   there) is refused, and saving it writes nothing: no line of the
+ *   attacker's ("log = ...") gets into the config file;
+ * - it is checked as the next start opens it, and one message says no
+ *   for a path that is not there, a directory, a FIFO and a link alike,
+ *   so the page does not tell which paths exist; a regular file is
+ *   taken. */
+static void test_script_setting(const char *config)
+{
+    char top[] = "/tmp/wsgemu-webforms.XXXXXX";
+    char evil[1100], file[1100], fifo[600], link[600], missing[600];
+    char before[4096], after[4096], body[4096], v[3400];
+    char msg[4][1024];
+    const char *bad[4];
+    FILE *f;
+    int i;
+
+    REQUIRE(mkdtemp(top) != NULL);
+    REQUIRE(emu_slurp(config, before, sizeof before) > 0);
+
+    /* "TOP/a\nlog = TOP/victim\n#/s.lua": made directory by directory
+     * below TOP; then a readable file in the last one. */
+    {
+        char dirs[1024];
+        size_t k;
+
+        snprintf(dirs, sizeof dirs, "%s/a\nlog = %s/victim\n#", top, top);
+        for (k = strlen(top) + 1; dirs[k]; k++) {
+            if (dirs[k] != '/')
+                continue;
+            dirs[k] = '\0';
+            REQUIRE(mkdir(dirs, 0700) == 0);
+            dirs[k] = '/';
+        }
+        REQUIRE(mkdir(dirs, 0700) == 0);
+        REQUIRE((size_t)snprintf(evil, sizeof evil, "%s/s.lua", dirs) <
+                sizeof evil);
+    }
+    f = fopen(evil, "w");
+    REQUIRE(f && fputs("print('hi')\n", f) >= 0 && fclose(f) == 0);
+    form_value(v, sizeof v, evil);
+    snprintf(body, sizeof body, "script=%s&save=1", v);
+    CHECK_EQ(post("/settings.json", body), 400);
+    CHECK(has("control character"));
+    REQUIRE(emu_slurp(config, after, sizeof after) > 0);
+    CHECK(strcmp(before, after) == 0);
+    CHECK(strstr(after, "log =") == NULL);
+    CHECK_EQ(get_settings(), 200);
+    CHECK(strstr(ans.body, "victim") == NULL);
+
+    /* What is not a regular file, or not there: one message. */
+    snprintf(missing, sizeof missing, "%s/none.lua", top);
+    snprintf(fifo, sizeof fifo, "%s/fifo.lua", top);
+    snprintf(link, sizeof link, "%s/link.lua", top);
+    snprintf(file, sizeof file, "%s/good.lua", top);
+    REQUIRE(mkfifo(fifo, 0600) == 0);
+    f = fopen(file, "w");
+    REQUIRE(f && fputs("print('hi')\n", f) >= 0 && fclose(f) == 0);
+    REQUIRE(symlink(file, link) == 0);
+    bad[0] = missing;
+    bad[1] = top; /* a directory */
+    bad[2] = fifo;
+    bad[3] = link;
+    for (i = 0; i < 4; i++) {
+        form_value(v, sizeof v, bad[i]);
+        snprintf(body, sizeof body, "script=%s", v);
+        CHECK_EQ(post("/settings.json", body), 400);
+        error_without(bad[i], msg[i], sizeof msg[i]);
+        if (i > 0 && strcmp(msg[i], msg[0]) != 0)
+            fprintf(stderr, "  \"%s\"\n  vs \"%s\"\n", msg[i], msg[0]);
+        CHECK(i == 0 || strcmp(msg[i], msg[0]) == 0);
+    }
+    CHECK(strstr(msg[0], "script: cannot read") != NULL);
+    form_value(v, sizeof v, file);
+    snprintf(body, sizeof body, "script=%s", v);
+    CHECK_EQ(post("/settings.json", body), 200);
+    CHECK_EQ(post("/settings.json", "script="), 200);
+
+    unlink(link);
+    unlink(file);
+    unlink(fifo);
+    unlink(evil);
+    /* The evil tree, from the bottom up. */
+    snprintf(file, sizeof file, "%s", evil);
+    while (strlen(file) > strlen(top)) {
+        *strrchr(file, '/') = '\0';
+        rmdir(file);
+    }
+    rmdir(top);
+}
+
 static void test_save(struct emu *e, struct emu_client *c, struct ctl *k,
                       const char *config)
 {
@@ -352,6 +494,65 @@ static void test_save(struct emu *e, struct emu_client *c, struct ctl *k,
     CHECK_EQ(emu_stop(&e2), 0);
 }
 
+/* save=1 on a config file it must not replace: a symbolic link stays a
+ * link (the file it names unchanged), a read-only file stays as it was,
+ * and both are refused (409) with nothing changed; a file it may write
+ * keeps its mode and (where the daemon may give it, as root) its owner. */
+static void test_save_guarded(const char *config)
+{
+    char real[600], before[4096], after[4096];
+    struct stat st;
+    struct emu e;
+
+    start(&e, config);
+
+    /* Its mode and owner stay. */
+    REQUIRE(chmod(config, 0640) == 0);
+    if (geteuid() == 0)
+        REQUIRE(chown(config, 4321, 4322) == 0);
+    else
+        printf("not root: the owner's part is not checked\n");
+    CHECK_EQ(post("/settings.json", "acceleration=310&save=1"), 200);
+    REQUIRE(lstat(config, &st) == 0);
+    CHECK(S_ISREG(st.st_mode));
+    CHECK_EQ(st.st_mode & 07777, 0640);
+    if (geteuid() == 0) {
+        CHECK_EQ(st.st_uid, 4321);
+        CHECK_EQ(st.st_gid, 4322);
+        REQUIRE(chown(config, 0, 0) == 0);
+    }
+    REQUIRE(emu_slurp(config, before, sizeof before) > 0);
+    CHECK(strstr(before, "acceleration = 310\n") != NULL);
+
+    /* Read-only: refused, the file and the settings as they were. */
+    REQUIRE(chmod(config, 0444) == 0);
+    CHECK_EQ(post("/settings.json", "acceleration=320&save=1"), 409);
+    CHECK(has("read-only"));
+    REQUIRE(emu_slurp(config, after, sizeof after) > 0);
+    CHECK(strcmp(before, after) == 0);
+    REQUIRE(stat(config, &st) == 0);
+    CHECK_EQ(st.st_mode & 07777, 0444);
+    CHECK_EQ(get_settings(), 200);
+    CHECK_NEAR(setting(ans.body, "acceleration"), 310.0, 1e-9);
+    REQUIRE(chmod(config, 0644) == 0);
+
+    /* A link: refused, still a link, the file it names as it was. */
+    snprintf(real, sizeof real, "%s.real", config);
+    REQUIRE(rename(config, real) == 0);
+    REQUIRE(symlink(real, config) == 0);
+    CHECK_EQ(post("/settings.json", "acceleration=330&save=1"), 409);
+    CHECK(has("symbolic link"));
+    REQUIRE(lstat(config, &st) == 0);
+    CHECK(S_ISLNK(st.st_mode));
+    REQUIRE(emu_slurp(real, after, sizeof after) > 0);
+    CHECK(strcmp(before, after) == 0);
+    CHECK_EQ(get_settings(), 200);
+    CHECK_NEAR(setting(ans.body, "acceleration"), 310.0, 1e-9);
+    REQUIRE(unlink(config) == 0);
+    REQUIRE(rename(real, config) == 0);
+    CHECK_EQ(emu_stop(&e), 0);
+}
+
 int main(int argc, char **argv)
 {
     char config[512];
@@ -374,7 +575,9 @@ int main(int argc, char **argv)
     test_wire(&e, &c);
     test_motion(&c, &k);
     test_forms(&c);
+    test_script_setting(config);
     test_save(&e, &c, &k, config);
+    test_save_guarded(config);
 
     unlink(config);
     TEST_EXIT();

@@ -12,7 +12,10 @@
  *   outside, is neither read, written, deleted nor run (403), and the file
  *   it points to is unchanged;
  * - caps: 256 KiB is taken, a Content-Length of one byte more refused
- *   (413) before the body is sent;
+ *   (413) before the body is sent; the directory's bounds (--script-quota,
+ *   --script-files): an upload past its bytes or count is refused (507;
+ *   413 for one larger than the quota itself) and not written, a
+ *   replacement counts for its new size;
  * - run: a script uploaded and run from the page (POST /script/run)
  *   registers its own command ID and answers it over TCP; the state shows
  *   it running (D19, "script"); what it prints comes in the event
@@ -20,6 +23,13 @@
  *   /script/stop stops it (D19 cleared, its ID E_CMD_UNKNOWN again);
  * - failure: a script that raises an error shows the error and D20 in the
  *   state (and GET /script/status); one that does not compile is 422;
+ * - control: POST /control's `script run` runs a script of the directory
+ *   by name (as POST /script/run); a path outside it (/etc/passwd, a
+ *   script that would print a marker, a file whose text a compile error
+ *   would quote) is refused (400) and nothing of it runs or shows;
+ * - race: runs of a name that another process keeps swapping between a
+ *   file of the directory and a link to a script outside it each run the
+ *   directory's file or are refused (403), never the file outside;
  * - without --script-dir every endpoint says so (409, naming the option).
  *
  * Built without libmicrohttpd (WSG_TEST_HAVE_WEB 0) it is skipped.
@@ -34,12 +44,14 @@
 #include <dirent.h>
 #include <errno.h>
 #include <netinet/in.h>
+#include <signal.h>
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/socket.h>
 #include <sys/stat.h>
 #include <sys/time.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #ifndef WSG_TEST_HAVE_WEB
@@ -70,7 +82,8 @@ static const char fail_lua[] = "cmd.register(0xB6)\n"
                                "cmd.read()\n"
                                "error(\"asked to fail\")\n";
 
-static char dir[256];     /* the script directory */
+static char top_dir[256]; /* the test's directory */
+static char dir[256];     /* the script directory, in it */
 static char outside[256]; /* beside it, outside */
 static char web[64];
 static struct http_answer ans;
@@ -384,10 +397,12 @@ static void test_run(struct emu *e)
     CHECK(strstr(ans.body, "\"failed\":true") != NULL);
     CHECK(strstr(ans.body, "asked to fail") != NULL);
 
-    /* One that does not compile: 422 with Lua's message; D20. */
+    /* One that does not compile: 422 with Lua's message, whole (it is
+     * the directory's own file); D20. */
     CHECK_EQ(req("PUT", "/scripts/syntax.lua", "this is not lua\n"), 201);
     CHECK_EQ(post("/script/run", "name=syntax.lua"), 422);
-    CHECK(strstr(ans.body, "syntax.lua") != NULL);
+    CHECK(strstr(ans.body, "syntax.lua:1: ") != NULL);
+    CHECK(strstr(ans.body, "near 'is'") != NULL);
     CHECK(state_until("\"script_failure\"", 0));
 
     /* The next start clears D20. */
@@ -397,6 +412,184 @@ static void test_run(struct emu *e)
 
     http_stream_close(&s);
     emu_close(&c);
+}
+
+/* A file outside the script directory: its path, made from name. */
+static void outside_file(char *path, size_t cap, const char *name,
+                         const char *text)
+{
+    FILE *f;
+
+    snprintf(path, cap, "%s/%s", top_dir, name);
+    f = fopen(path, "w");
+    REQUIRE(f != NULL);
+    REQUIRE(fputs(text, f) >= 0);
+    REQUIRE(fclose(f) == 0);
+}
+
+/* What the scripts printed so far (GET /script/output). */
+static const char *script_output(void)
+{
+    return req("GET", "/script/output?from=0", NULL) == 200 ? ans.body : "";
+}
+
+/* POST /control runs the control channel's commands, but its `script
+ * run` is the page's: a script of the script directory by name, never a
+ * file by path (which would run, and show the compile error of, any file
+ * the daemon can read). */
+static void test_control_run(void)
+{
+    char marker[512], secret[512], form[700];
+
+    outside_file(marker, sizeof marker, "marker.lua",
+                 "print('OUTSIDE-MARKER')\n");
+    outside_file(secret, sizeof secret, "secret.lua", "hunter2 s3cr3t\n");
+    snprintf(form, sizeof form, "line=script+run+%s", marker);
+    CHECK_EQ(post("/control", form), 400);
+    CHECK(strstr(ans.body, "\"ok\":false") != NULL);
+    CHECK(strstr(ans.body, "NAME.lua") != NULL);
+    CHECK(strstr(script_output(), "OUTSIDE-MARKER") == NULL);
+    snprintf(form, sizeof form, "line=script+run+%s", secret);
+    CHECK_EQ(post("/control", form), 400);
+    CHECK(strstr(ans.body, "s3cr3t") == NULL);
+    CHECK_EQ(post("/control", "line=script+run+/etc/passwd"), 400);
+    CHECK(strstr(ans.body, "root") == NULL);
+    CHECK_EQ(post("/control", "line=script+run+../marker.lua"), 400);
+    CHECK(strstr(script_output(), "OUTSIDE-MARKER") == NULL);
+    CHECK_EQ(req("GET", "/script/status", NULL), 200);
+    CHECK(strstr(ans.body, "marker") == NULL &&
+          strstr(ans.body, "secret") == NULL);
+    /* By name: the directory's script, as POST /script/run runs it. */
+    CHECK_EQ(post("/control", "line=script+run+ping.lua"), 200);
+    CHECK(strstr(ans.body, "ok script running ping.lua") != NULL);
+    CHECK_EQ(post("/control", "line=script+stop"), 200);
+    unlink(marker);
+    unlink(secret);
+}
+
+/* Runs against link swaps: POST /script/run of a name that another
+ * process keeps replacing, in turn by a regular file of the directory and
+ * by a symbolic link to a script outside it, which would print a marker.
+ * The check and the open are one step, so no run may run the file
+ * outside: each is the directory's script (200) or refused (403). */
+#define RACE_RUNS  3000
+#define RACE_SWAPS 20000000L
+
+static void test_race(void)
+{
+    char outside_lua[512], src[512], name[512], tmpf[512], tmpl[512];
+    int ran = 0, refused = 0, other = 0, i, st;
+    pid_t pid;
+
+    outside_file(outside_lua, sizeof outside_lua, "race-outside.lua",
+                 "print('OUTSIDE-MARKER')\n");
+    snprintf(src, sizeof src, "%s/.race-src", dir);
+    snprintf(name, sizeof name, "%s/race.lua", dir);
+    snprintf(tmpf, sizeof tmpf, "%s/.race-f", dir);
+    snprintf(tmpl, sizeof tmpl, "%s/.race-l", dir);
+    {
+        FILE *f = fopen(src, "w");
+
+        REQUIRE(f && fputs("print('inside')\n", f) >= 0 && fclose(f) == 0);
+    }
+    REQUIRE(link(src, name) == 0);
+    fflush(NULL);
+    pid = fork();
+    REQUIRE(pid >= 0);
+    if (pid == 0) {
+        long k;
+
+        /* Bounded: it ends by itself should the parent not stop it. */
+        for (k = 0; k < RACE_SWAPS; k++) {
+            /* rename() of a second link to the same file does nothing:
+             * one left from such a turn goes first. */
+            unlink(tmpf);
+            if (link(src, tmpf) == 0)
+                rename(tmpf, name);
+            if (symlink(outside_lua, tmpl) == 0)
+                rename(tmpl, name);
+        }
+        _exit(0);
+    }
+    for (i = 0; i < RACE_RUNS; i++) {
+        st = post("/script/run", "name=race.lua");
+        if (st == 200)
+            ran++;
+        else if (st == 403)
+            refused++;
+        else
+            other++;
+    }
+    kill(pid, SIGKILL);
+    waitpid(pid, NULL, 0);
+    printf("race: %d runs, %d refused (a link), %d other\n", ran, refused,
+           other);
+    /* Both sides of the swap were met, and nothing else happened. */
+    CHECK(ran > 0 && refused > 0);
+    CHECK_EQ(other, 0);
+    CHECK(strstr(script_output(), "OUTSIDE-MARKER") == NULL);
+    unlink(name);
+    unlink(tmpf);
+    unlink(tmpl);
+    unlink(src);
+    unlink(outside_lua);
+}
+
+/* n bytes of a comment, as a script's text. */
+static const char *text_of(size_t n)
+{
+    static char buf[2048];
+
+    memset(buf, '-', n);
+    buf[n] = '\0';
+    return buf;
+}
+
+/* Uploads within the directory's bounds (--script-quota 1000
+ * --script-files 3): past the bytes 507 (a script larger than the whole
+ * quota 413), past the count 507, a replacement counted for its new size
+ * only; what is refused is not written. */
+static void test_quota(const char *exe)
+{
+    const char *args[] = {
+        "--tcp", "127.0.0.1:0",    "--web", "127.0.0.1:0",    "--script-dir",
+        dir,     "--script-quota", "1000",  "--script-files", "3",
+        NULL};
+    char path[512];
+    struct emu e;
+
+    REQUIRE(emu_start(&e, exe, args) == 0);
+    REQUIRE(emu_field(&e, "web", web, sizeof web) != NULL);
+    CHECK_EQ(dir_entries(), 0);
+    CHECK_EQ(req("PUT", "/scripts/a.lua", text_of(400)), 201);
+    CHECK_EQ(req("PUT", "/scripts/b.lua", text_of(400)), 201);
+    /* 1100 bytes in all: no room. */
+    CHECK_EQ(req("PUT", "/scripts/c.lua", text_of(300)), 507);
+    CHECK(strstr(ans.body, "--script-quota") != NULL);
+    /* A replacement: its new size in place of its old one. */
+    CHECK_EQ(req("PUT", "/scripts/a.lua", text_of(600)), 200);
+    CHECK_EQ(req("PUT", "/scripts/a.lua", text_of(601)), 507);
+    /* More than the quota on its own. */
+    CHECK_EQ(req("PUT", "/scripts/c.lua", text_of(1001)), 413);
+    CHECK_EQ(req("PUT", "/scripts/c.lua", "-"), 507);
+    CHECK_EQ(dir_entries(), 2);
+    /* Room again; then the count is the bound. */
+    CHECK_EQ(req("DELETE", "/scripts/b.lua", NULL), 200);
+    CHECK_EQ(req("PUT", "/scripts/c.lua", text_of(100)), 201);
+    CHECK_EQ(req("PUT", "/scripts/d.lua", text_of(10)), 201);
+    CHECK_EQ(req("PUT", "/scripts/e.lua", "-"), 507);
+    CHECK(strstr(ans.body, "--script-files") != NULL);
+    CHECK_EQ(req("PUT", "/scripts/d.lua", text_of(20)), 200);
+    CHECK_EQ(dir_entries(), 3);
+    snprintf(path, sizeof path, "%s/e.lua", dir);
+    CHECK(!exists(path));
+    CHECK_EQ(emu_stop(&e), 0);
+    snprintf(path, sizeof path, "%s/a.lua", dir);
+    unlink(path);
+    snprintf(path, sizeof path, "%s/c.lua", dir);
+    unlink(path);
+    snprintf(path, sizeof path, "%s/d.lua", dir);
+    unlink(path);
 }
 
 /* A daemon without --script-dir: every endpoint says what is missing. */
@@ -433,6 +626,7 @@ int main(int argc, char **argv)
     if (!WSG_TEST_HAVE_WEB)
         test_skip("wsgemu was built without libmicrohttpd");
     REQUIRE(mkdtemp(top) != NULL);
+    snprintf(top_dir, sizeof top_dir, "%s", top);
     snprintf(dir, sizeof dir, "%s/user", top);
     snprintf(outside, sizeof outside, "%s/outside.lua", top);
     REQUIRE(mkdir(dir, 0755) == 0);
@@ -443,9 +637,9 @@ int main(int argc, char **argv)
     test_names();
     test_caps();
     test_run(&e);
+    test_control_run();
+    test_race();
     CHECK_EQ(emu_stop(&e), 0);
-    test_no_dir(exe);
-
     /* Only what the test made. */
     snprintf(path, sizeof path, "%s/ping.lua", dir);
     unlink(path);
@@ -453,6 +647,9 @@ int main(int argc, char **argv)
     unlink(path);
     snprintf(path, sizeof path, "%s/syntax.lua", dir);
     unlink(path);
+    test_quota(exe);
+    test_no_dir(exe);
+
     unlink(outside);
     CHECK_EQ(rmdir(dir), 0);
     CHECK_EQ(rmdir(top), 0);

@@ -541,9 +541,11 @@ static void test_script(struct env *v, struct emu *e)
     CHECK_EQ(CONTROL(v, addr, "script", "stop"), 0);
 
     /* A script that fails as it starts: its error, and the state says
-     * so. */
+     * so. Outside a script directory, the error names the line and Lua's
+     * words, not the file's text. */
     CHECK_EQ(CONTROL(v, addr, "script", "run", bad), 1);
-    CHECK(has(v->err, "bad.lua:1: unexpected symbol near '='"));
+    CHECK(has(v->err, "bad.lua:1: unexpected symbol ("));
+    CHECK(!has(v->err, "near"));
     CHECK_EQ(CONTROL(v, addr, "script", "status"), 0);
     CHECK(!strncmp(v->out, "script failed\n", 14) && has(v->out, "error ") &&
           has(v->out, "unexpected symbol"));

@@ -7,7 +7,11 @@
 #      wsgemu serves and the installed wsgctl talks to it; the installed
 #      config file starts it, and so does a copy with every example setting
 #      of it uncommented (but `can`, which needs a SocketCAN interface),
-#      whose values the gripper then shows; a bad line in it is refused.
+#      whose values the gripper then shows; a bad line in it is refused;
+#      logrotate's snippet (run by logrotate, where installed, on a
+#      scratch copy of /var/log) rotates wsgemu.service's log and every
+#      wsgemu@NAME's, and signals (SIGHUP) each service whose log it
+#      rotated, and no other.
 #   2. the .deb from cpack: its fields (name, version, architecture,
 #      dependencies, conffiles), its changelog (this version) and its
 #      files; lintian finds no error and no warning in it (where lintian
@@ -205,6 +209,40 @@ for pair in "etc/wsgemu/wsgemu.conf packaging/wsgemu.conf" \
     set -- $pair
     cmp -s "$P/$1" "$SRC/$2" || fail "$P/$1 differs from $2"
 done
+# logrotate's snippet, run for real on a scratch copy of /var/log (its
+# paths moved there) with a systemctl that only writes down what it is
+# asked: the unit's log and each template instance's are rotated, and each
+# emulator that writes one is told (SIGHUP), that one and no other.
+check "logrotate's snippet: wsgemu.service's and each wsgemu@NAME's logs, each service signalled"
+L=$S/logrotate
+mkdir -p "$L/bin" "$L/log/wsgemu" "$L/log/wsgemu-cell4" \
+    "$L/log/wsgemu-lab\x2d2"
+for d in wsgemu wsgemu-cell4 'wsgemu-lab\x2d2'; do
+    echo "a line" >"$L/log/$d/wsgemu.log"
+done
+sed "s|/var/log/|$L/log/|g" "$P/etc/logrotate.d/wsgemu" >"$L/wsgemu"
+grep -q "^$L/log/wsgemu/\*\.log {" "$L/wsgemu" &&
+    grep -q "^$L/log/wsgemu-\*/\*\.log {" "$L/wsgemu" ||
+    { show "$L/wsgemu"; fail "the snippet lacks a stanza for /var/log/wsgemu/*.log or /var/log/wsgemu-*/*.log"; }
+if command -v logrotate >/dev/null 2>&1; then
+    printf '#!/bin/sh\necho "$*" >>"%s/calls"\n' "$L" >"$L/bin/systemctl"
+    chmod 755 "$L/bin/systemctl"
+    PATH="$L/bin:$PATH" logrotate -f -s "$L/state" "$L/wsgemu" \
+        >"$L/out" 2>&1 || { show "$L/out"; fail "logrotate failed"; }
+    for d in wsgemu wsgemu-cell4 'wsgemu-lab\x2d2'; do
+        [ -f "$L/log/$d/wsgemu.log.1" ] && [ ! -e "$L/log/$d/wsgemu.log" ] ||
+            { show "$L/out"; fail "$d/wsgemu.log was not rotated"; }
+    done
+    sort "$L/calls" >"$L/calls.sorted"
+    printf '%s\n' 'kill --signal=HUP wsgemu.service' \
+        'kill --signal=HUP wsgemu@cell4.service' \
+        'kill --signal=HUP wsgemu@lab\x2d2.service' | sort >"$L/calls.want"
+    cmp -s "$L/calls.sorted" "$L/calls.want" ||
+        { show "$L/calls"; fail "logrotate signalled other than each rotated log's service once"; }
+else
+    echo "    no logrotate here (scripts/deps.sh --test installs it): its run is skipped"
+fi
+
 check "the benchmark tools are not installed"
 for b in wsgbench wsgref; do
     [ ! -e "$P/bin/$b" ] || fail "$P/bin/$b is installed"

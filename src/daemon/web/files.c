@@ -4,8 +4,9 @@
  * The new content goes to a temporary file beside it, is synced, and is
  * renamed over the old one, so that a reader (the next start, a running
  * script's require) sees the old file or the new one, never half of one.
+ * A file replaced for another (the config file) keeps its owner and mode.
  */
-#define _POSIX_C_SOURCE 200809L /* openat, unlinkat, renameat, fchmod */
+#define _POSIX_C_SOURCE 200809L /* openat, unlinkat, renameat, fchown */
 
 #include <errno.h>
 #include <fcntl.h>
@@ -32,20 +33,36 @@ static int write_all(int fd, const char *buf, size_t len)
     return 0;
 }
 
+/* The new file takes like's owner and mode: its owner first (a change
+ * of owner may clear set-ID bits), where the daemon may give it; -EPERM
+ * where it may not, so that saving never hands a file to another owner. */
+static int take_owner_and_mode(int fd, const struct stat *like)
+{
+    struct stat st;
+
+    if (fstat(fd, &st) < 0)
+        return -errno;
+    if ((st.st_uid != like->st_uid || st.st_gid != like->st_gid) &&
+        fchown(fd, like->st_uid, like->st_gid) < 0)
+        return -errno;
+    return fchmod(fd, like->st_mode & 07777) < 0 ? -errno : 0;
+}
+
 int wsg_web_replace_file(int dfd, const char *name, const char *tmp,
-                         const void *buf, size_t len, int mode)
+                         const void *buf, size_t len, const struct stat *like)
 {
     const int flags = O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC;
     int fd, r;
 
     /* The daemon serves one request at a time: a temporary file already
-     * there is what a crash left behind. */
-    fd = openat(dfd, tmp, flags, 0644);
+     * there is what a crash left behind. Made for the owner alone until
+     * it has like's owner and mode. */
+    fd = openat(dfd, tmp, flags, like ? 0600 : 0644);
     if (fd < 0 && errno == EEXIST && unlinkat(dfd, tmp, 0) == 0)
-        fd = openat(dfd, tmp, flags, 0644);
+        fd = openat(dfd, tmp, flags, like ? 0600 : 0644);
     if (fd < 0)
         return -errno;
-    r = mode >= 0 && fchmod(fd, (mode_t)mode) < 0 ? -errno : 0;
+    r = like ? take_owner_and_mode(fd, like) : 0;
     if (r == 0)
         r = write_all(fd, buf, len);
     if (r == 0 && fsync(fd) < 0)

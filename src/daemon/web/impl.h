@@ -151,10 +151,13 @@ void wsg_web_done(struct wsg_web *web);
 
 /* Replace the file name (relative to dfd, or AT_FDCWD) with len bytes of
  * buf, through the temporary file tmp beside it: written, synced and
- * renamed over it; links are not followed. mode: the new file's mode,
- * or -1 for 0644 less the umask. 0 or -errno (nothing is replaced). */
+ * renamed over it; links are not followed. like: the file whose owner
+ * and mode the new one takes (-EPERM when the owner cannot be given), or
+ * NULL for the daemon's user and 0644 less the umask. 0 or -errno
+ * (nothing is replaced). */
+struct stat;
 int wsg_web_replace_file(int dfd, const char *name, const char *tmp,
-                         const void *buf, size_t len, int mode);
+                         const void *buf, size_t len, const struct stat *like);
 
 /* ---- the parts' handlers ---- */
 
@@ -183,6 +186,14 @@ enum MHD_Result wsg_web_serve_script_file(struct wsg_web *web,
                                           struct wsg_web_req *req);
 enum MHD_Result wsg_web_serve_script_run(struct wsg_web *web,
                                          struct wsg_web_req *req);
+/* Run name, a script of the script directory (a plain NAME.lua, as the
+ * file manager takes it), on h: checked and opened in one step, run from
+ * that descriptor. 0, or the HTTP status of the refusal with the reason
+ * in why (400 a bad name, 404, 403 a link or not a file, 409 no script
+ * directory or one runs already, 422 it does not compile or failed as it
+ * started). The caller brings the gripper's time up to date around it. */
+unsigned wsg_web_script_start(struct wsg_web *web, struct wsg_script *h,
+                              const char *name, char *why, size_t cap);
 /* world.c: the control channel's commands and the communication log. */
 int wsg_web_world_open(struct wsg_web *web);
 void wsg_web_world_close(struct wsg_web *web);

@@ -8,9 +8,12 @@
  * directory is opened once per request: every file operation is relative
  * to that descriptor (openat, renameat, unlinkat) and follows no symbolic
  * link, so neither a name nor a link planted in the directory leads out
- * of it. An upload is written to a hidden temporary file and renamed over
- * the name, so a script is never seen half written (a running script's
- * `require` included).
+ * of it. A script is run from the descriptor that opened it, so a link
+ * swapped in after the check cannot lead out either. An upload is written
+ * to a hidden temporary file and renamed over the name, so a script is
+ * never seen half written (a running script's `require` included).
+ * Uploads are bounded: the directory's scripts may take --script-quota
+ * bytes and be --script-files in number after one.
  */
 #define _GNU_SOURCE
 
@@ -256,9 +259,87 @@ static enum MHD_Result file_get(struct wsg_web_req *req, int dfd,
     return ret;
 }
 
+/* The scripts of the directory (what the list shows) but name, which an
+ * upload replaces: how many, and their bytes. 0 or -errno. */
+static int dir_usage(int dfd, const char *name, unsigned long *count,
+                     unsigned long long *bytes)
+{
+    char why[128];
+    struct dirent *de;
+    struct stat st;
+    DIR *dir;
+    int fd;
+
+    *count = 0;
+    *bytes = 0;
+    /* A description of its own: reading it moves no offset of dfd's. */
+    fd = openat(dfd, ".", O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+    if (fd < 0)
+        return -errno;
+    dir = fdopendir(fd);
+    if (!dir) {
+        int r = -errno;
+
+        close(fd);
+        return r;
+    }
+    while ((de = readdir(dir)) != NULL) {
+        if (strcmp(de->d_name, name) == 0 ||
+            name_check(de->d_name, why, sizeof why) < 0 ||
+            file_stat(fd, de->d_name, &st, why, sizeof why) != 0)
+            continue;
+        (*count)++;
+        *bytes += (unsigned long long)st.st_size;
+    }
+    closedir(dir);
+    return 0;
+}
+
+/* An upload past the directory's bounds (--script-quota, --script-files):
+ * 0, or the answer's status with the reason in why: 413 for a script
+ * larger than the whole quota, 507 for one the directory has no room
+ * left for. */
+static unsigned quota_check(const struct wsg_options *o, int dfd,
+                            const char *name, size_t len, char *why,
+                            size_t cap)
+{
+    unsigned long long bytes;
+    unsigned long count;
+    int r;
+
+    if (len > o->script_quota) {
+        snprintf(why, cap,
+                 "%s: %lu bytes are more than the script directory may hold "
+                 "(%lu bytes, --script-quota)",
+                 name, (unsigned long)len, (unsigned long)o->script_quota);
+        return MHD_HTTP_CONTENT_TOO_LARGE;
+    }
+    r = dir_usage(dfd, name, &count, &bytes);
+    if (r < 0) {
+        snprintf(why, cap, "%s not saved: %s", name, strerror(-r));
+        return MHD_HTTP_INTERNAL_SERVER_ERROR;
+    }
+    if (count + 1 > o->script_files) {
+        snprintf(why, cap,
+                 "%s not saved: the script directory holds %lu scripts, "
+                 "at most %lu (--script-files): delete one first",
+                 name, count, (unsigned long)o->script_files);
+        return MHD_HTTP_INSUFFICIENT_STORAGE;
+    }
+    if (bytes + len > o->script_quota) {
+        snprintf(why, cap,
+                 "%s not saved: the scripts would take %llu bytes, at most "
+                 "%lu (--script-quota): delete some first",
+                 name, bytes + len, (unsigned long)o->script_quota);
+        return MHD_HTTP_INSUFFICIENT_STORAGE;
+    }
+    return 0;
+}
+
 /* PUT: the body becomes the file, through a temporary file renamed over
- * it: 201 made, 200 replaced. */
-static enum MHD_Result file_put(struct wsg_web_req *req, int dfd,
+ * it: 201 made, 200 replaced; within the directory's bounds. */
+static enum MHD_Result file_put(const struct wsg_web *web,
+                                struct wsg_web_req *req, int dfd,
                                 const char *name)
 {
     char why[256], tmp[SCRIPT_NAME_MAX + 8];
@@ -270,9 +351,13 @@ static enum MHD_Result file_put(struct wsg_web_req *req, int dfd,
     if (status != 0 && status != MHD_HTTP_NOT_FOUND)
         return wsg_web_error(req->conn, status, why);
     existed = status == 0;
+    status =
+        quota_check(&web->d->opt, dfd, name, req->body_len, why, sizeof why);
+    if (status != 0)
+        return wsg_web_error(req->conn, status, why);
     /* Hidden: no script's name starts with a dot. */
     snprintf(tmp, sizeof tmp, ".%s.part", name);
-    r = wsg_web_replace_file(dfd, name, tmp, req->body, req->body_len, -1);
+    r = wsg_web_replace_file(dfd, name, tmp, req->body, req->body_len, NULL);
     if (r < 0)
         goto fail;
     return wsg_web_json(req->conn, existed ? MHD_HTTP_OK : MHD_HTTP_CREATED,
@@ -324,7 +409,7 @@ enum MHD_Result wsg_web_serve_script_file(struct wsg_web *web,
     if (dfd < 0)
         return dir_error(web, req->conn, dfd);
     if (req->method == WSG_WEB_PUT)
-        ret = file_put(req, dfd, name);
+        ret = file_put(web, req, dfd, name);
     else if (req->method == WSG_WEB_DELETE)
         ret = file_delete(req, dfd, name);
     else
@@ -333,51 +418,79 @@ enum MHD_Result wsg_web_serve_script_file(struct wsg_web *web,
     return ret;
 }
 
-/* POST /script/run, name=NAME: the script host runs DIR/NAME, as the
- * control channel's `script run DIR/NAME`. */
+unsigned wsg_web_script_start(struct wsg_web *web, struct wsg_script *h,
+                              const char *name, char *why, size_t cap)
+{
+    char path[PATH_MAX];
+    int dfd, fd, r;
+
+    if (name_check(name, why, cap) < 0)
+        return MHD_HTTP_BAD_REQUEST;
+    dfd = dir_open(web);
+    if (dfd < 0) {
+        if (dfd == -ENXIO)
+            snprintf(why, cap,
+                     "no script directory: start wsgemu with --script-dir "
+                     "DIR");
+        else
+            snprintf(why, cap, "script directory %s: %s",
+                     web->d->opt.script_dir, strerror(-dfd));
+        return MHD_HTTP_CONFLICT;
+    }
+    /* Checked and opened in one step, relative to the directory and not
+     * following a link: what runs is what was opened, whatever is put in
+     * the name's place afterwards. */
+    fd = wsg_script_open_at(dfd, name);
+    close(dfd);
+    if (fd < 0) {
+        snprintf(why, cap, "%s: %s%s", name, wsg_script_open_strerror(fd),
+                 fd == -ELOOP || fd == -ENOEXEC
+                     ? " of the script directory: not run"
+                     : "");
+        return fd == -ENOENT ? MHD_HTTP_NOT_FOUND
+               : fd == -ELOOP || fd == -ENOEXEC || fd == -EACCES
+                   ? MHD_HTTP_FORBIDDEN
+                   : MHD_HTTP_INTERNAL_SERVER_ERROR;
+    }
+    if ((size_t)snprintf(path, sizeof path, "%s/%s", web->d->opt.script_dir,
+                         name) >= sizeof path) {
+        close(fd);
+        snprintf(why, cap, "the script's path is too long");
+        return MHD_HTTP_INTERNAL_SERVER_ERROR;
+    }
+    r = wsg_script_start_fd(h, fd, path, why, cap);
+    close(fd);
+    if (r == -EBUSY) {
+        snprintf(why, cap, "a script runs already: stop it first");
+        return MHD_HTTP_CONFLICT;
+    }
+    /* It failed as it started (does not compile, or an error before it
+     * first waits): D20 is set, its error in the state. */
+    if (r < 0)
+        return r == -EINVAL ? HTTP_UNPROCESSABLE
+                            : MHD_HTTP_INTERNAL_SERVER_ERROR;
+    return 0;
+}
+
+/* POST /script/run, name=NAME: the script host runs DIR/NAME. */
 static enum MHD_Result script_run(struct wsg_web *web, struct wsg_web_req *req)
 {
     const char *name = wsg_web_field(req, "name");
-    char why[512], path[PATH_MAX];
     struct wsg_script *h;
-    struct stat st;
     unsigned status;
-    int dfd, r;
+    char why[512];
 
     if (!name)
         return wsg_web_error(req->conn, MHD_HTTP_BAD_REQUEST,
                              "no script: post name=NAME.lua");
-    if (name_check(name, why, sizeof why) < 0)
-        return wsg_web_error(req->conn, MHD_HTTP_BAD_REQUEST, why);
-    dfd = dir_open(web);
-    if (dfd < 0)
-        return dir_error(web, req->conn, dfd);
-    /* The host opens the file by its path: it must be a regular file of
-     * the directory, not a link out of it. */
-    status = file_stat(dfd, name, &st, why, sizeof why);
-    close(dfd);
-    if (status != 0)
-        return wsg_web_error(req->conn, status, why);
-    if ((size_t)snprintf(path, sizeof path, "%s/%s", web->d->opt.script_dir,
-                         name) >= sizeof path)
-        return wsg_web_error(req->conn, MHD_HTTP_INTERNAL_SERVER_ERROR,
-                             "the script's path is too long");
     if (wsg_gripper_script(web->g, &h) < 0)
         return wsg_web_error(req->conn, MHD_HTTP_INTERNAL_SERVER_ERROR,
                              "no memory for a script host");
     wsg_web_touch(web);
-    r = wsg_script_start(h, path, why, sizeof why);
+    status = wsg_web_script_start(web, h, name, why, sizeof why);
     wsg_web_done(web);
-    if (r == -EBUSY)
-        return wsg_web_error(req->conn, MHD_HTTP_CONFLICT,
-                             "a script runs already: stop it first");
-    /* It failed as it started (does not compile, or an error before it
-     * first waits): D20 is set, its error in the state. */
-    if (r < 0)
-        return wsg_web_error(req->conn,
-                             r == -EINVAL ? HTTP_UNPROCESSABLE
-                                          : MHD_HTTP_INTERNAL_SERVER_ERROR,
-                             why);
+    if (status != 0)
+        return wsg_web_error(req->conn, status, why);
     return wsg_web_json(req->conn, MHD_HTTP_OK,
                         "{\"ok\":true,\"running\":\"%s\"}", name);
 }

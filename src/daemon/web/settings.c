@@ -13,7 +13,7 @@
  * every gripper of a fleet was made from, so they change for every
  * gripper, as a restart with the saved file would have them.
  */
-#define _POSIX_C_SOURCE 200809L /* fstat, AT_FDCWD */
+#define _GNU_SOURCE /* faccessat's AT_EACCESS */
 
 #include <errno.h>
 #include <fcntl.h>
@@ -25,6 +25,7 @@
 #include <unistd.h>
 
 #include "impl.h"
+#include "script.h"
 
 /* The settings of the page, in its order: the config file's keys (the
  * options table's names) and the labels of the real gripper's page. */
@@ -214,7 +215,13 @@ static int line_key(const char *line, size_t len, char *key, size_t cap)
  * a second one of the same setting dropped (the file's last one would
  * win), the missing ones appended; no startup script drops its lines.
  * Comments and the other lines stay as they are. Written to a file
- * beside it and renamed over it, so a reader never sees half a file. 0
+ * beside it with the file's owner and mode and renamed over it, so a
+ * reader never sees half a file. Refused: a symbolic link (-ELOOP), what
+ * is not a regular file (-ENOEXEC), a file the daemon may not write or
+ * that has no write bit (-EACCES, -EROFS), one whose owner the daemon
+ * may not give the new file (-EPERM). A
+ * value with a line break is never written (-EILSEQ): it would be a line
+ * of its own, any key = value (the options refuse one before this). 0
  * or -errno. */
 static int save_config(const char *path, const struct wsg_options *o,
                        const int *given)
@@ -225,14 +232,29 @@ static int save_config(const char *path, const struct wsg_options *o,
     size_t in_len = 0, out_len = 0, out_cap, i, n;
     struct stat st;
     FILE *f;
-    int r;
+    int fd, r;
 
     for (i = 0; i < WEB_NSETTINGS; i++)
         rows[i] = table_row(web_settings[i].key);
-    f = fopen(path, "r");
-    if (!f)
+    /* A link is not replaced by a file, nor a file the daemon may not
+     * write overwritten (a read-only one: no write bit at all, whoever
+     * the daemon runs as). */
+    fd = open(path, O_RDONLY | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC);
+    if (fd < 0)
         return -errno;
+    f = fdopen(fd, "r");
+    if (!f) {
+        r = -errno;
+        close(fd);
+        return r;
+    }
     r = fstat(fileno(f), &st) < 0 ? -errno : 0;
+    if (r == 0 && !S_ISREG(st.st_mode))
+        r = -ENOEXEC;
+    if (r == 0 && faccessat(AT_FDCWD, path, W_OK, AT_EACCESS) < 0)
+        r = errno == EROFS ? -EROFS : -EACCES;
+    if (r == 0 && !(st.st_mode & 0222))
+        r = -EACCES;
     if (r == 0 && st.st_size > (off_t)WEB_CONFIG_MAX)
         r = -EFBIG;
     if (r == 0) {
@@ -270,6 +292,10 @@ static int save_config(const char *path, const struct wsg_options *o,
                     continue;
                 keep = 0;
                 value_text(o, rows[k], val, sizeof val);
+                if (strpbrk(val, "\r\n")) {
+                    r = -EILSEQ;
+                    goto out;
+                }
                 if (!written[k] && val[0])
                     out_len += (size_t)sprintf(out + out_len, "%s = %s\n",
                                                rows[k]->name, val);
@@ -289,18 +315,41 @@ static int save_config(const char *path, const struct wsg_options *o,
         if (!given[i] || written[i] || !rows[i])
             continue;
         value_text(o, rows[i], val, sizeof val);
+        if (strpbrk(val, "\r\n")) {
+            r = -EILSEQ;
+            goto out;
+        }
         if (val[0])
             out_len += (size_t)sprintf(out + out_len, "%s = %s\n",
                                        rows[i]->name, val);
     }
     sprintf(tmp, "%s.new", path);
-    r = wsg_web_replace_file(AT_FDCWD, path, tmp, out, out_len,
-                             (int)(st.st_mode & 07777));
+    r = wsg_web_replace_file(AT_FDCWD, path, tmp, out, out_len, &st);
 out:
     free(tmp);
     free(out);
     free(in);
     return r;
+}
+
+/* A startup script the next start could not open would stop it: refused
+ * now, while the user is there to see why. Opened as the start will open
+ * it (wsg_script_open: no link followed, a regular file). One message for
+ * every reason (none there, unreadable, a directory, a link, ...): the
+ * page must not tell whether any path exists. */
+static int script_check(const char *path, char *err, size_t errcap)
+{
+    int fd = wsg_script_open(path, NULL, 0);
+
+    if (fd >= 0) {
+        close(fd);
+        return 0;
+    }
+    snprintf(err, errcap,
+             "script: cannot read '%s' as a startup script (a regular file "
+             "the emulator may read, not a link)",
+             path);
+    return -EINVAL;
 }
 
 /* Make the checked values of o the running daemon's: the options (what
@@ -333,6 +382,28 @@ static void apply(struct wsg_web *web, const struct wsg_options *o,
     }
     d->opt.axis = o->axis;
     wsg_daemon_reconfigure(d, model);
+}
+
+/* Why save_config refused, for the page. */
+static const char *save_error(int r)
+{
+    switch (r) {
+    case -ELOOP:
+        return "it is a symbolic link, which saving would replace by a "
+               "file (give --config the file it names)";
+    case -ENOEXEC:
+        return "it is not a regular file";
+    case -EACCES:
+    case -EROFS:
+        return "it is read-only to the emulator";
+    case -EPERM:
+        return "it belongs to a user or group the emulator may not give "
+               "the saved file";
+    case -EILSEQ:
+        return "a value holds a line break";
+    default:
+        return strerror(-r);
+    }
 }
 
 int wsg_web_settings_apply(struct wsg_web *web,
@@ -374,30 +445,24 @@ int wsg_web_settings_apply(struct wsg_web *web,
             break;
         }
         given[k] = 1;
-        if (strcmp(fl->name, "script") == 0) {
-            /* Empty: no startup script (the real page's checkbox off). A
-             * file the next start could not read would stop it: refused
-             * now, while the user is there to see why. */
-            script = fl->value;
-            if (!script[0]) {
-                o->script_path = NULL;
-                continue;
-            }
-            if (access(script, R_OK) < 0) {
-                snprintf(err, errcap, "script: cannot read '%s': %s", script,
-                         strerror(errno));
-                r = -EINVAL;
-                break;
-            }
+        if (strcmp(fl->name, "script") == 0 && !fl->value[0]) {
+            /* Empty: no startup script (the real page's checkbox off). */
+            script = "";
+            o->script_path = NULL;
+            continue;
         }
         r = wsg_options_set(o, fl->name, fl->value, err, errcap);
+        if (r == 0 && strcmp(fl->name, "script") == 0) {
+            script = fl->value;
+            r = script_check(script, err, errcap);
+        }
     }
     if (r == 0 && save) {
         r = save_config(web->d->opt.config_path, o, given);
         if (r < 0) {
             snprintf(err, errcap,
                      "cannot save to %s: %s; the settings were not changed",
-                     web->d->opt.config_path, strerror(-r));
+                     web->d->opt.config_path, save_error(r));
             r = r == -EINVAL ? -EIO : r;
         }
     }
@@ -427,10 +492,15 @@ static enum MHD_Result serve_post(struct wsg_web *web, struct wsg_web_req *req)
         if (strcmp(req->fields[i].name, "save") != 0)
             fields[n++] = req->fields[i];
     r = wsg_web_settings_apply(web, fields, n, saving, err, sizeof err);
+    /* 409: the config file is in a state the save must not change (a
+     * link, read-only, another's). */
     if (r < 0)
         return wsg_web_error(req->conn,
                              r == -EINVAL ? MHD_HTTP_BAD_REQUEST
-                                          : MHD_HTTP_INTERNAL_SERVER_ERROR,
+                             : r == -ELOOP || r == -ENOEXEC || r == -EACCES ||
+                                     r == -EROFS || r == -EPERM
+                                 ? MHD_HTTP_CONFLICT
+                                 : MHD_HTTP_INTERNAL_SERVER_ERROR,
                              err);
     if (saving)
         snprintf(msg, sizeof msg, "applied and saved to %s",

@@ -11,9 +11,13 @@
  * The scenario commands are the control channel's own: the page has a
  * control channel of its own that serves no socket (wsg_control_new), so
  * a command typed on the page does what it does over --control, answered
- * with the same line.
+ * with the same line. All but `script run FILE`: on the page it runs a
+ * script of the script directory by its name, as POST /script/run does,
+ * for the page must not run (and so show the compile error of) any file
+ * the daemon can read.
  */
 #include <errno.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -36,6 +40,27 @@ static void on_ctl_answer(void *ctx, const char *line, size_t len)
     web->ctl_answer[web->ctl_answer_len] = '\0';
 }
 
+/* The page's `script run`: what POST /script/run runs, a script of the
+ * script directory by its name, never any file the daemon can read (the
+ * control channel's own takes a path). */
+static int on_ctl_script_run(void *ctx, struct wsg_script *h, const char *file,
+                             char *err, size_t errcap)
+{
+    unsigned status;
+    char why[512];
+
+    status = wsg_web_script_start(ctx, h, file, why, sizeof why);
+    if (status == 0)
+        return 0;
+    /* A path, or a bad name: what the page takes instead. */
+    if (status == MHD_HTTP_BAD_REQUEST)
+        snprintf(err, errcap, "%s (the page runs NAME.lua of --script-dir)",
+                 why);
+    else
+        snprintf(err, errcap, "%s", why);
+    return -1;
+}
+
 int wsg_web_world_open(struct wsg_web *web)
 {
     int r = wsg_control_new(&web->ctl, web->reactor, web->sched);
@@ -43,6 +68,7 @@ int wsg_web_world_open(struct wsg_web *web)
     if (r < 0)
         return r;
     wsg_control_session_init(&web->ctl_session, on_ctl_answer, web);
+    web->ctl_session.script_run = on_ctl_script_run;
     return 0;
 }
 
