@@ -905,6 +905,9 @@ void wsg_script_open_api(lua_State *L, struct wsg_script *h)
     set_nil(L, NULL, base_out);
     set_nil(L, LUA_OSLIBNAME, os_out);
     set_nil(L, LUA_LOADLIBNAME, package_out);
+    /* The functions that resume and catch (coro.c), before the prelude
+     * keeps any of them. */
+    wsg_script_open_coro(L);
     /* require: modules from the script's directory, Lua text only (the
      * preload, then api_searcher). package.path tells where, for scripts
      * that read it; changing it changes nothing. */

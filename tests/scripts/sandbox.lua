@@ -2,7 +2,8 @@
 -- Each try runs inside the script and answers what happened, for the test
 -- to compare with what the sandbox promises (src/script/script.h): no
 -- io, os.execute, loadlib or debug, text chunks only, modules only from
--- beside the script, a memory cap, and preemption of loops. The test runs
+-- beside the script, a memory cap, and preemption of loops, in the body
+-- and in its coroutines. The test runs
 -- a copy of it in a directory of its own, with a module outside that
 -- directory and a precompiled chunk beside it.
 local wire = require "wire"
@@ -76,15 +77,25 @@ h[0xB4] = function()
   end
 end
 
--- Loops where the script cannot be preempted: a coroutine of its own, and
--- a comparison that table.sort calls from C. Each must end in an error.
+-- Loops where the script cannot be preempted, in functions Lua calls from
+-- C: a sort's comparison, a __tostring, a load reader. Each must end in an
+-- error. A coroutine of the script's own is preempted like the body: one
+-- that counts for some 30 slices ends, and says so.
 h[0xB5] = function(id)
-  local co = coroutine.create(function() while true do end end)
-  local sorted = pcall(table.sort, {3, 2, 1}, function()
+  local handled = {pcall(table.sort, {3, 2, 1}, function()
     while true do end
+  end)}
+  local shown = {pcall(tostring, setmetatable({}, {__tostring = function()
+    while true do end
+  end}))}
+  local loaded = {load(function() while true do end end)}
+  local co = coroutine.wrap(function()
+    local n = 0
+    for i = 1, 3000000 do n = n + i end
+    return n
   end)
-  wire.reply(id, outcome(coroutine.resume(co)), sorted,
-             coroutine.status(co))
+  wire.reply(id, outcome(handled[1], handled[2]), outcome(shown[1], shown[2]),
+             outcome(loaded[1], loaded[2]), co())
 end
 
 -- A finalizer: Lua would run it with no hook, where a loop could not be
@@ -103,11 +114,12 @@ h[0xB6] = function(id)
   wire.reply(id, ran, same, rawget(mt, "__gc") ~= nil)
 end
 
--- A loop around the stuck coroutine, each error caught: the script keeps
+-- A loop around a stuck __tostring, each error caught: the script keeps
 -- running stuck code, and the host must still get the processor back.
 h[0xB8] = function()
+  local t = setmetatable({}, {__tostring = function() while true do end end})
   while true do
-    pcall(coroutine.wrap(function() while true do end end))
+    pcall(tostring, t)
   end
 end
 
