@@ -815,50 +815,10 @@ static const char *const prelude[] = {
     "    return ((u(x) << n) | (u(x) >> (32 - n))) & M\n", "  end,\n", "}\n",
     "bit32.btest = function(...) return bit32.band(...) ~= 0 end\n",
     "bit32.rrotate = function(x, n) return bit32.lrotate(x, -n) end\n",
-    /* The library's C loops that the count hook cannot preempt and whose
-     * length memory does not bound: Lua's pattern matcher backtracks (a
-     * find of (".-"):rep(10).."b" in 100 bytes runs for hours), and
-     * table.move walks any range of nils. A pattern function is refused
-     * when its worst case, C(n + k, k) steps for k repeating items (one
-     * more unless anchored with ^) on n bytes, exceeds 10^9 (about a
-     * second); a move of more than 2^24 elements is refused. */
-    "local sfind, smatch, sgmatch, sgsub = string.find, string.match,",
-    " string.gmatch, string.gsub\n",
-    "local ssub, tmove, error = string.sub, table.move, error\n",
-    "local function skipset(p, i, n)\n", "  i = i + 1\n",
-    "  if ssub(p, i, i) == '^' then i = i + 1 end\n", "  repeat\n",
-    "    if ssub(p, i, i) == '%' then i = i + 2 else i = i + 1 end\n",
-    "  until i > n or ssub(p, i, i) == ']'\n", "  return i + 1\n", "end\n",
-    "local function repeats(p)\n", "  local k, i, n = 0, 1, #p\n",
-    "  if ssub(p, 1, 1) ~= '^' then k = 1 else i = 2 end\n",
-    "  while i <= n do\n", "    local c, item = ssub(p, i, i), true\n",
-    "    if c == '%' then\n", "      local d = ssub(p, i + 1, i + 1)\n",
-    "      if d == 'b' then i = i + 4; item = false\n",
-    "      elseif d == 'f' then i = skipset(p, i + 2, n); item = false\n",
-    "      else i = i + 2 end\n",
-    "    elseif c == '[' then i = skipset(p, i, n)\n",
-    "    elseif c == '(' or c == ')' then i = i + 1; item = false\n",
-    "    else i = i + 1 end\n", "    local q = item and ssub(p, i, i) or ''\n",
-    "    if q == '*' or q == '+' or q == '-' or q == '?' then\n",
-    "      k = k + 1; i = i + 1\n", "    end\n", "  end\n", "  return k\n",
-    "end\n", "local function guard(fn, s, p)\n",
-    "  if type(s) ~= 'string' and type(s) ~= 'number' then return end\n",
-    "  if type(p) ~= 'string' then return end\n",
-    "  local n, k, cost = #tostring(s), repeats(p), 1\n",
-    "  for j = 1, k do\n", "    cost = cost * (n + j) / j\n",
-    "    if cost > 1e9 then\n",
-    "      error(fn .. ': pattern too costly for a subject of ' .. n ..\n",
-    "            ' bytes (' .. k .. ' repeating items could backtrack for'\n",
-    "            .. ' minutes)', 3)\n", "    end\n", "  end\n", "end\n",
-    "string.find = function(s, p, init, plain)\n",
-    "  if not plain then guard('find', s, p) end\n",
-    "  return sfind(s, p, init, plain)\n", "end\n",
-    "string.match = function(s, p, ...)\n", "  guard('match', s, p)\n",
-    "  return smatch(s, p, ...)\n", "end\n",
-    "string.gmatch = function(s, p, ...)\n", "  guard('gmatch', s, p)\n",
-    "  return sgmatch(s, p, ...)\n", "end\n",
-    "string.gsub = function(s, p, ...)\n", "  guard('gsub', s, p)\n",
-    "  return sgsub(s, p, ...)\n", "end\n", "string.gfind = string.gmatch\n",
+    /* table.move walks any range of nils, in C where the count hook
+     * cannot preempt it: a move of more than 2^24 elements is refused. */
+    "string.gfind = string.gmatch\n",
+    "local tmove, error = table.move, error\n",
     "table.move = function(a1, f, e, t, a2)\n",
     "  if math.type(f) and math.type(e) and e - f >= 2^24 then\n",
     "    error('move: more than 2^24 elements', 2)\n", "  end\n",
@@ -905,8 +865,12 @@ void wsg_script_open_api(lua_State *L, struct wsg_script *h)
     set_nil(L, NULL, base_out);
     set_nil(L, LUA_OSLIBNAME, os_out);
     set_nil(L, LUA_LOADLIBNAME, package_out);
-    /* The functions that resume and catch (coro.c), before the prelude
+    /* The pattern functions that yield across themselves (strlib.c), and
+     * the functions that resume and catch (coro.c), before the prelude
      * keeps any of them. */
+    lua_getglobal(L, LUA_STRLIBNAME);
+    wsg_strlib_open(L, &h->slice);
+    lua_pop(L, 1);
     wsg_script_open_coro(L);
     /* require: modules from the script's directory, Lua text only (the
      * preload, then api_searcher). package.path tells where, for scripts

@@ -2,8 +2,8 @@
 -- Each try runs inside the script and answers what happened, for the test
 -- to compare with what the sandbox promises (src/script/script.h): no
 -- io, os.execute, loadlib or debug, text chunks only, modules only from
--- beside the script, a memory cap, and preemption of loops, in the body
--- and in its coroutines. The test runs
+-- beside the script, a memory cap, and preemption of loops, in the body,
+-- in its coroutines and in the pattern functions. The test runs
 -- a copy of it in a directory of its own, with a module outside that
 -- directory and a precompiled chunk beside it.
 local wire = require "wire"
@@ -123,17 +123,20 @@ h[0xB8] = function()
   end
 end
 
--- The library's C loops that no hook preempts are bounded by their
--- arguments: a backtracking pattern and a move over a vast range are
--- refused at once; ordinary patterns and a plain find of any size work.
+-- The pattern functions yield across themselves: a pattern that
+-- backtracks for millions of steps runs (preempted) and answers, and one
+-- the old pre-check refused for its worst case works; a malformed one
+-- fails as in Lua. A move over a vast range is refused at once; a plain
+-- find and an anchored match of any size work.
 h[0xB9] = function(id)
-  local backtrack = pcall(string.find, ("a"):rep(100), (".-"):rep(10) .. "b")
-  local quadratic = pcall(string.gsub, ("1"):rep(100000), "%d+x", "")
+  local lazy = string.find(("a"):rep(100000), (".-"):rep(10) .. "a")
+  local _, quadratic = string.gsub(("1"):rep(2000), "%d+x", "")
   local _, key = pcall(string.match, "key = value", "^(%w+)%s*=%s*(%w+)$")
   local move = pcall(table.move, {}, 1, 2^40, 2)
   local plain = string.find(("a"):rep(100000) .. "b", "b", 1, true)
   local anchored = #(string.match(("x"):rep(100000), "^(x*)$"))
-  wire.reply(id, backtrack, quadratic, key, move, plain, anchored)
+  local _, bad = pcall(string.find, "a", "[a")
+  wire.reply(id, lazy, quadratic, key, move, plain, anchored, bad)
 end
 
 h[0xB7] = function(id, p)
