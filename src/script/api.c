@@ -302,11 +302,15 @@ static int cmd_send(lua_State *L)
     uint8_t id = api_byte(L, 1);
     struct wsg_session *s;
     char err[128];
+    size_t visits;
     long n;
     uint16_t crc;
 
     n = wsg_script_flatten(L, 2, h->tx + WSG_HEADER_LEN, WSG_SCRIPT_SEND_MAX,
-                           err, sizeof err);
+                           err, sizeof err, &visits);
+    /* Each value visited is a step of the slice (the bytes copied are
+     * fewer); the next instruction ends the slice when they use it up. */
+    wsg_script_spend(h, L, (uint32_t)visits);
     if (n < 0)
         return luaL_error(L, "cmd.send: %s", err);
     s = api_host(h);

@@ -119,12 +119,18 @@ void wsg_script_run(struct wsg_script *h);
  * L's stack from index first to the top, in order, into out: a number in
  * 0..255 is a byte, a boolean 0 or 1, a string its bytes, a table its
  * elements 1..#t (raw, no metamethods), nested at most
- * WSG_SCRIPT_NEST_MAX deep. Returns the bytes written, or -1 with the
- * reason in err (a number out of range, another type, too deep, more than
- * cap bytes). It never raises a Lua error. */
+ * WSG_SCRIPT_NEST_MAX deep, visiting at most WSG_SCRIPT_SEND_VISITS
+ * values (each argument and each element, a table repeated counted each
+ * time). Returns the bytes written, or -1 with the reason in err (a
+ * number out of range, another type, too deep, too many values, more than
+ * cap bytes). The values it visited go to *visits (unless NULL). It never
+ * raises a Lua error. */
 #define WSG_SCRIPT_NEST_MAX 5
+/* Twice a payload of single bytes, each in a table of its own: 2^17
+ * values, a millisecond or two. */
+#define WSG_SCRIPT_SEND_VISITS (1ul << 17)
 struct lua_State;
 long wsg_script_flatten(struct lua_State *L, int first, uint8_t *out,
-                        size_t cap, char *err, size_t errlen);
+                        size_t cap, char *err, size_t errlen, size_t *visits);
 
 #endif
