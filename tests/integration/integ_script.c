@@ -45,7 +45,14 @@
  *   stepped time exactly;
  * - startup: --script registers its IDs before the ready line, a missing
  *   file is exit status 1, a syntax error leaves the daemon running with
- *   D20.
+ *   D20;
+ * - hogs: work inside the library's C functions (hogs.lua: %b() over
+ *   200 kB, a set of 100,000 characters, a literal pattern of 100,000
+ *   bytes, a plain find of it, a backtracking gsub, cmd.send of 100^5
+ *   references to one table, a fresh looping coroutine each time, a
+ *   looping message handler, loops where nothing can yield (a
+ *   __tostring, a load reader)) leaves every Loop (06h) answered within
+ *   HOG_BOUND_MS while it runs, and SIGTERM ends the daemon at once.
  */
 #define _GNU_SOURCE /* mkdtemp */
 
@@ -1647,6 +1654,103 @@ static void part_startup(const char *exe)
     CHECK_EQ(emu_stop(&e), 0);
 }
 
+/* ---- part hogs ---- */
+
+/* How long a Loop may wait while a script hogs the processor: the
+ * script holds the loop for one slice at a time (docs/scripting.md), a
+ * millisecond or less, or 20 slices where it cannot be preempted; this
+ * leaves room for a loaded machine and the sanitizers, and the freezes
+ * it catches last seconds or for ever. */
+#define HOG_BOUND_MS emu_ms(500)
+/* How long each hog is watched. Not a bound: what is judged is each
+ * Loop's wait. */
+#define HOG_WATCH_MS 1500
+
+static const struct {
+    int n;
+    const char *what;
+    const char *error; /* what the hog's first error says; NULL: none */
+} hogs[] = {
+    {1, "%b() over 200 kB", NULL},
+    {2, "a set of 100,000 characters", NULL},
+    {3, "a literal pattern of 100,000 bytes", NULL},
+    {4, "a plain find of 100,000 bytes", NULL},
+    {5, "a backtracking gsub", NULL},
+    {6, "cmd.send of 100^5 references", "cmd.send: more than "},
+    {7, "a fresh looping coroutine each time", NULL},
+    {8, "a looping message handler", NULL},
+    {9, "%b() inside a __tostring", "where it cannot be preempted"},
+    {10, "loops in a load reader", "where it cannot be preempted"},
+};
+
+/* One hog in a daemon of its own: Loops every 20 ms while it runs, each
+ * answered within HOG_BOUND_MS; the script still running (the control
+ * channel answers too) and its first error as expected; SIGTERM ends the
+ * daemon within HOG_BOUND_MS plus the time an exit takes. */
+static void hog_run(const char *exe, size_t i)
+{
+    static const char *const args[] = {"--tcp", "127.0.0.1:0", "--control",
+                                       "127.0.0.1:0", NULL};
+    uint8_t which = (uint8_t)hogs[i].n, tok[4] = {'h', 'o', 'g', 0};
+    struct wsg_client_frame f;
+    struct emu e;
+    struct emu_client c;
+    struct ctl k;
+    double t0, worst = 0, end;
+    int loops = 0, lost = 0, st;
+
+    REQUIRE(emu_start(&e, exe, args) == 0);
+    REQUIRE(ctl_open(&k, &e) == 0);
+    REQUIRE(emu_open(&c, &e, &emu_tcp) == 0);
+    RUN_OK(&k, "hogs.lua");
+    REQUIRE(emu_send(&c, 0xB0, &which, 1) == 0);
+    end = emu_now_ms() + HOG_WATCH_MS;
+    while (emu_now_ms() < end) {
+        tok[3] = (uint8_t)loops;
+        t0 = emu_now_ms();
+        st = emu_request(&c, WSG_CMD_LOOP, tok, sizeof tok, &f, HOG_BOUND_MS);
+        if (st != WSG_E_SUCCESS || EMU_NPARAMS(&f) != sizeof tok ||
+            memcmp(EMU_PARAMS(&f), tok, sizeof tok) != 0) {
+            lost++;
+            break; /* a frozen daemon: the rest would wait in line */
+        }
+        if (emu_now_ms() - t0 > worst)
+            worst = emu_now_ms() - t0;
+        loops++;
+        emu_sleep_ms(20);
+    }
+    printf("hog %d, %s: %d Loops answered, worst %.1f ms%s\n", hogs[i].n,
+           hogs[i].what, loops, worst, lost ? ", then one lost" : "");
+    CHECK_EQ(lost, 0);
+    CHECK(loops > 0);
+    if (!lost) {
+        char st_json[2048];
+
+        /* The hog's start was answered long ago, behind the Loops. */
+        CHECK_EQ(emu_recv_id(&c, 0xB0, &f, HOG_BOUND_MS), 1);
+        snprintf(st_json, sizeof st_json, "%s", script_status(&k));
+        CHECK_HAS(st_json, "\"running\":true,");
+        if (hogs[i].error)
+            CHECK_HAS(script_output(&k, 0), hogs[i].error);
+        else
+            CHECK(strstr(script_output(&k, 0), "hog error") == NULL);
+    }
+    emu_close(&c);
+    ctl_close(&k);
+    t0 = emu_now_ms();
+    CHECK_EQ(emu_stop(&e), 0);
+    printf("hog %d: SIGTERM to exit %.1f ms\n", hogs[i].n, emu_now_ms() - t0);
+    CHECK(emu_now_ms() - t0 <= HOG_BOUND_MS + EMU_EXIT_MS / 5);
+}
+
+static void part_hogs(const char *exe)
+{
+    size_t i;
+
+    for (i = 0; i < sizeof hogs / sizeof hogs[0]; i++)
+        hog_run(exe, i);
+}
+
 int main(int argc, char **argv)
 {
     const char *exe = emu_exe(argc, argv);
@@ -1684,6 +1788,10 @@ int main(int argc, char **argv)
     }
     if (all || strcmp(part, "startup") == 0) {
         part_startup(exe);
+        ran++;
+    }
+    if (all || strcmp(part, "hogs") == 0) {
+        part_hogs(exe);
         ran++;
     }
     if (!ran) {
