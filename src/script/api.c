@@ -441,7 +441,9 @@ static int mc_move(lua_State *L)
 {
     struct wsg_script *h = wsg_script_of(L);
     double w = api_motion_number(L, 1), v = api_motion_number(L, 2);
-    lua_Integer flags = luaL_optinteger(L, 3, 0);
+    /* 21h's flags byte: a value no byte can hold is an error, not its low
+     * bits. */
+    uint8_t flags = lua_isnoneornil(L, 3) ? 0 : api_byte(L, 3);
     uint16_t st = wsg_device_motion_check(h->dev, 1);
 
     if (st == WSG_E_SUCCESS)
@@ -458,10 +460,13 @@ static int mc_homing(lua_State *L)
     int dir = WSG_HOME_DEFAULT;
     uint16_t st;
 
+    /* As 20h's byte: 0, 1, 2 home, another byte is E_INVALID_PARAMETER
+     * (the axis says so); a value no byte can hold is an error, where an
+     * int would have kept its low bits (2^32 + 1 homed positive). */
     if (lua_isboolean(L, 1))
         dir = lua_toboolean(L, 1) ? WSG_HOME_POSITIVE : WSG_HOME_NEGATIVE;
     else if (!lua_isnoneornil(L, 1))
-        dir = (int)luaL_checkinteger(L, 1); /* as 20h: 0, 1, 2 */
+        dir = api_byte(L, 1);
     st = wsg_device_motion_check(h->dev, 0);
     if (st == WSG_E_SUCCESS)
         st = wsg_axis_request_homing(api_axis(L), dir, 0);

@@ -99,7 +99,8 @@ enum {
     OP_GRASP,
     OP_CLAMP,
     OP_STOP_CLAMPING,
-    OP_RELEASE
+    OP_RELEASE,
+    OP_INTEGERS
 };
 
 /* BCh's fields (api.lua), in order. */
@@ -535,7 +536,7 @@ static void api_values(struct emu_client *c, struct ctl *k)
 
 static void api_motion(struct emu_client *c, struct ctl *k)
 {
-    char t[512];
+    char t[512], want[512];
     double lim;
 
     /* At rest, referenced at 110 mm by the firmware's homing. */
@@ -565,6 +566,22 @@ static void api_motion(struct emu_client *c, struct ctl *k)
     CMD_OK(k, "time step 3000");
     CHECK_NEAR(float_of(c, WSG_CMD_GET_WIDTH), 110.0, 1e-3);
     expect_readings(c, "false");
+
+    /* Integer arguments past what their parameter holds are errors (a
+     * 64-bit direction no longer homes by its low bits); a byte 20h
+     * refuses is refused as 20h refuses it. */
+    op(c, OP_INTEGERS, NULL, 0, -1, t, sizeof t);
+    snprintf(want, sizeof want,
+             "8|bad argument #1 to 'homing' (not a byte (0..255))|"
+             "bad argument #1 to 'homing' (not a byte (0..255))|"
+             "bad argument #3 to 'move' (not a byte (0..255))|"
+             "bad argument #3 to 'move' (not a byte (0..255))|"
+             "bad argument #1 to 'register' (not a byte (0..255))|"
+             "bad argument #1 to 'type' (a finger is 0 or 1)|"
+             "bad argument #1 to 'etob' (not a status code)|%d",
+             WSG_E_INVALID_PARAMETER);
+    CHECK_STR(t, want);
+    CHECK(!(flags_of(c) & WSG_SF_MOVING));
 
     /* mc.move, absolute then relative (flag 1) */
     op_status(c, OP_MOVE, (const float[]){30, 50}, 2, 0, WSG_E_SUCCESS);
