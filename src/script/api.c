@@ -696,24 +696,25 @@ static int open_socket(lua_State *L)
  * directory, each dot of NAME a subdirectory, as Lua text. It reads the
  * directory the host keeps, not package.path, which the script can set
  * (to "/etc/?.lua" or "../?.lua"); with the dots turned into slashes no
- * name climbs out of the directory. Lua's own searcher would also load a
- * precompiled chunk, which no sandbox can trust. */
+ * name climbs out of the directory, and the file is opened one component
+ * at a time without following a link (wsg_script_loadmodule), so no link
+ * below the directory leads out of it either. Lua's own searcher would
+ * also load a precompiled chunk, which no sandbox can trust. */
 static int api_searcher(lua_State *L)
 {
     struct wsg_script *h = wsg_script_of(L);
-    const char *name = luaL_checkstring(L, 1), *path, *c;
+    const char *name = luaL_checkstring(L, 1), *path, *rel, *c;
     luaL_Buffer b;
     int r;
 
     luaL_buffinit(L, &b);
-    luaL_addstring(&b, h->dir);
-    luaL_addchar(&b, '/');
     for (c = name; *c; c++)
         luaL_addchar(&b, *c == '.' ? '/' : *c);
     luaL_addstring(&b, ".lua");
     luaL_pushresult(&b);
-    path = lua_tostring(L, -1);
-    r = wsg_script_loadfile(L, path);
+    rel = lua_tostring(L, -1);
+    path = lua_pushfstring(L, "%s/%s", h->dir, rel);
+    r = wsg_script_loadmodule(L, h->dir, rel, path);
     if (r == -ENOENT || r == -ENOTDIR) {
         lua_pushfstring(L, "no file '%s'", path);
         return 1;

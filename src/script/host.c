@@ -7,7 +7,7 @@
  * that is. The memory cap is the allocator's; preemption is a count hook
  * that yields the body when its slice is used up.
  */
-#define _GNU_SOURCE /* realpath, O_NOFOLLOW */
+#define _GNU_SOURCE /* realpath, O_NOFOLLOW, O_DIRECTORY, openat */
 
 #include "script_impl.h"
 
@@ -409,17 +409,15 @@ void wsg_script_free(struct wsg_script *h)
     free(h);
 }
 
-int wsg_script_loadfile(lua_State *L, const char *path)
+/* Load the file open at fd as Lua text named "@name"; fd is closed. */
+static int script_load_fd(lua_State *L, int fd, const char *name)
 {
     struct stat st;
     size_t len = 0, skip = 0;
     char *buf = NULL;
     ssize_t n;
-    int fd, r;
+    int r;
 
-    fd = open(path, O_RDONLY | O_NOFOLLOW | O_CLOEXEC);
-    if (fd < 0)
-        return -errno;
     if (fstat(fd, &st) < 0) {
         r = -errno;
         goto out;
@@ -453,13 +451,88 @@ int wsg_script_loadfile(lua_State *L, const char *path)
     if (len && buf[0] == '#')
         while (skip < len && buf[skip] != '\n')
             buf[skip++] = ' ';
-    lua_pushfstring(L, "@%s", path);
+    lua_pushfstring(L, "@%s", name);
     r = luaL_loadbufferx(L, buf, len, lua_tostring(L, -1), "t");
     lua_remove(L, -2); /* the name */
 out:
     free(buf);
     close(fd);
     return r;
+}
+
+int wsg_script_loadfile(lua_State *L, const char *path)
+{
+    int fd = open(path, O_RDONLY | O_NOFOLLOW | O_CLOEXEC);
+
+    if (fd < 0)
+        return -errno;
+    return script_load_fd(L, fd, path);
+}
+
+/* Open rel below the directory dir, one component at a time, following
+ * no link: each directory is opened with O_NOFOLLOW from the one before,
+ * so a link anywhere in rel (to a directory outside, or swapped in for
+ * one after a check) fails with ELOOP. Empty components are skipped, as
+ * a path resolves "a//b". An fd, or -errno. */
+static int script_open_beneath(const char *dir, const char *rel)
+{
+    char comp[WSG_SCRIPT_PATH_MAX];
+    const char *p = rel, *end;
+    int dfd, fd;
+    size_t n;
+
+    dfd = open(dir, O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+    if (dfd < 0)
+        return -errno;
+    for (;;) {
+        while (*p == '/')
+            p++;
+        end = strchr(p, '/');
+        n = end ? (size_t)(end - p) : strlen(p);
+        if (n >= sizeof comp) {
+            fd = -ENAMETOOLONG;
+            break;
+        }
+        memcpy(comp, p, n);
+        comp[n] = '\0';
+        p += n;
+        while (*p == '/')
+            p++;
+        if (*p == '\0') {
+            fd = openat(dfd, comp, O_RDONLY | O_NOFOLLOW | O_CLOEXEC);
+            if (fd < 0)
+                fd = -errno;
+            break;
+        }
+        fd =
+            openat(dfd, comp, O_RDONLY | O_DIRECTORY | O_NOFOLLOW | O_CLOEXEC);
+        if (fd < 0) {
+            struct stat st;
+
+            /* Linux says ENOTDIR for a link where O_DIRECTORY wants a
+             * directory: a link is ELOOP here as at the end. */
+            fd = -errno;
+            if (fd == -ENOTDIR &&
+                fstatat(dfd, comp, &st, AT_SYMLINK_NOFOLLOW) == 0 &&
+                S_ISLNK(st.st_mode))
+                fd = -ELOOP;
+            break;
+        }
+        close(dfd);
+        dfd = fd;
+    }
+    close(dfd);
+    return fd;
+}
+
+int wsg_script_loadmodule(lua_State *L, const char *dir, const char *rel,
+                          const char *name)
+{
+    int fd = script_open_beneath(dir, rel);
+
+    if (fd < 0)
+        return fd;
+    return script_load_fd(L, fd, name);
 }
 
 /* Load the file as the body of a fresh state. 0, or -errno/-EINVAL with

@@ -85,6 +85,11 @@ static inline struct wsg_script *wsg_script_of(lua_State *L)
  * when it cannot be read: -ELOOP for a link, -EFBIG past
  * WSG_SCRIPT_SOURCE_MAX. */
 int wsg_script_loadfile(lua_State *L, const char *path);
+/* The same for a module: the file rel below the directory dir, opened
+ * one component at a time without following a link anywhere in rel
+ * (-ELOOP), named "@name" in messages. */
+int wsg_script_loadmodule(lua_State *L, const char *dir, const char *rel,
+                          const char *name);
 
 /* Open the script's libraries (api.c) in L: the sandboxed standard ones,
  * the gripper's and the Lua 5.1/5.2 names. */

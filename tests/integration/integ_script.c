@@ -1304,15 +1304,19 @@ static void part_lifecycle(const char *exe)
 /* ---- part sandbox ---- */
 
 /* The sandbox's directory: DIR/user/ holds copies of sandbox.lua and
- * wire.lua (and later binmod.lua, a precompiled chunk), DIR/outside.lua a
- * module just outside the script's directory. Removed at exit. */
+ * wire.lua (and later binmod.lua, a precompiled chunk), a link to
+ * DIR/outside.lua, a module just outside the script's directory, a link
+ * to the directory DIR/outdir and a directory of its own, sub. Removed at
+ * exit. */
 static char sandbox_dir[128];
 
 static void sandbox_remove(void)
 {
-    static const char *const files[] = {"user/sandbox.lua", "user/wire.lua",
-                                        "user/binmod.lua", "user/linked.lua",
-                                        "outside.lua"};
+    static const char *const files[] = {
+        "user/sandbox.lua", "user/wire.lua", "user/binmod.lua",
+        "user/linked.lua",  "user/linkdir",  "user/sub/real.lua",
+        "outside.lua",      "outdir/mod.lua"};
+    static const char *const dirs[] = {"user/sub", "user", "outdir"};
     char path[256];
     size_t i;
 
@@ -1322,8 +1326,10 @@ static void sandbox_remove(void)
         snprintf(path, sizeof path, "%s/%s", sandbox_dir, files[i]);
         unlink(path);
     }
-    snprintf(path, sizeof path, "%s/user", sandbox_dir);
-    rmdir(path);
+    for (i = 0; i < sizeof dirs / sizeof dirs[0]; i++) {
+        snprintf(path, sizeof path, "%s/%s", sandbox_dir, dirs[i]);
+        rmdir(path);
+    }
     rmdir(sandbox_dir);
 }
 
@@ -1357,6 +1363,7 @@ static int copy_script(const char *name)
 static void sandbox_setup(void)
 {
     static const char outside[] = "return 'outside'\n";
+    static const char sub[] = "return 'sub'\n";
     char path[256], link[256];
 
     snprintf(sandbox_dir, sizeof sandbox_dir, "/tmp/wsgemu-script-XXXXXX");
@@ -1372,6 +1379,19 @@ static void sandbox_setup(void)
      * it (nor the host a link that replaced a script it checked). */
     snprintf(link, sizeof link, "%s/user/linked.lua", sandbox_dir);
     REQUIRE(symlink(path, link) == 0);
+    /* A link beside the script to a directory outside with a module in
+     * it: require follows no link in the middle of a module's path
+     * either. A directory of its own is a module's path as before. */
+    snprintf(path, sizeof path, "%s/outdir", sandbox_dir);
+    REQUIRE(mkdir(path, 0700) == 0);
+    snprintf(link, sizeof link, "%s/user/linkdir", sandbox_dir);
+    REQUIRE(symlink(path, link) == 0);
+    snprintf(path, sizeof path, "%s/outdir/mod.lua", sandbox_dir);
+    REQUIRE(write_file(path, outside, sizeof outside - 1) == 0);
+    snprintf(path, sizeof path, "%s/user/sub", sandbox_dir);
+    REQUIRE(mkdir(path, 0700) == 0);
+    snprintf(path, sizeof path, "%s/user/sub/real.lua", sandbox_dir);
+    REQUIRE(write_file(path, sub, sizeof sub - 1) == 0);
 }
 
 /* What the script cannot reach or load. */
@@ -1409,6 +1429,11 @@ static void sandbox_closed(struct emu_client *c)
     CHECK_HAS(msg, "error:error loading module 'linked' from file '");
     CHECK_HAS(msg, "linked.lua': " /* ELOOP's words */);
     CHECK(strstr(msg, "symbolic links") != NULL);
+    msg = field(t, 3);
+    CHECK_HAS(msg, "error:error loading module 'linkdir.mod' from file '");
+    CHECK_HAS(msg, "/user/linkdir/mod.lua': ");
+    CHECK(strstr(msg, "symbolic links") != NULL);
+    CHECK_STR(field(t, 4), "ok:sub");
 }
 
 static void part_sandbox(const char *exe)

@@ -53,10 +53,15 @@ h[0xB1] = function(id, p)
   local bin_ok, bin_err = pcall(require, "binmod")
   -- linked.lua beside the script is a symbolic link to a file outside.
   local link_ok, link_err = pcall(require, "linked")
+  -- linkdir beside the script is a symbolic link to a directory outside
+  -- holding mod.lua; sub is a directory holding real.lua.
+  local dir_ok, dir_err = pcall(require, "linkdir.mod")
+  local sub_ok, sub = pcall(require, "sub.real")
   package.path = wire.string(p) .. "/?.lua"
   local ok, err = pcall(require, "outside")
   wire.reply(id, outcome(ok, err), outcome(bin_ok, bin_err, nil, true),
-             outcome(link_ok, link_err, nil, true))
+             outcome(link_ok, link_err, nil, true),
+             outcome(dir_ok, dir_err, nil, true), outcome(sub_ok, sub))
 end
 
 -- A precompiled chunk, for the test to put beside the script.
