@@ -433,16 +433,18 @@ static int fail(struct wsg_match *m, uint32_t *steps)
     return GO;
 }
 
-/* Bytes of a scan, one step each, until the steps run out. */
+/* The scans: a byte (or a piece of a back-reference) for the step the
+ * machine took, then one a step while steps last. The first is free of
+ * the steps left, or a slice of one step would never get past it. */
 static int scan_expand(struct wsg_match *m, uint32_t *steps)
 {
     struct wsg_match_choice *ch;
 
     while (item_match(m, m->scan + m->count, m->p, m->set)) {
+        m->count++;
         if (*steps == 0)
             return WSG_MATCH_MORE;
         (*steps)--;
-        m->count++;
     }
     /* The longest first; each failure gives one back. */
     if (!(ch = push(m, C_MAX)))
@@ -461,10 +463,7 @@ static int scan_balance(struct wsg_match *m, uint32_t *steps)
 {
     char open = m->p[2], close = m->p[3];
 
-    for (; m->scan < m->src_end; m->scan++) {
-        if (*steps == 0)
-            return WSG_MATCH_MORE;
-        (*steps)--;
+    while (m->scan < m->src_end) {
         /* The closing byte first, as Lua: %b"" closes at the next '"'. */
         if (*m->scan == close) {
             if (--m->count == 0) {
@@ -476,6 +475,10 @@ static int scan_balance(struct wsg_match *m, uint32_t *steps)
         } else if (*m->scan == open) {
             m->count++;
         }
+        m->scan++;
+        if (*steps == 0)
+            return WSG_MATCH_MORE;
+        (*steps)--;
     }
     m->mode = M_FAIL;
     return GO;
@@ -486,9 +489,6 @@ static int scan_backref(struct wsg_match *m, uint32_t *steps)
     size_t len = (size_t)m->cap[m->ref].len, n;
 
     while (m->count < len) {
-        if (*steps == 0)
-            return WSG_MATCH_MORE;
-        (*steps)--;
         n = len - m->count;
         if (n > WSG_MATCH_BYTES_PER_STEP)
             n = WSG_MATCH_BYTES_PER_STEP;
@@ -497,6 +497,11 @@ static int scan_backref(struct wsg_match *m, uint32_t *steps)
             return GO;
         }
         m->count += n;
+        if (m->count < len) {
+            if (*steps == 0)
+                return WSG_MATCH_MORE;
+            (*steps)--;
+        }
     }
     m->s += len;
     m->p += 2;
