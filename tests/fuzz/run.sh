@@ -1,7 +1,7 @@
 #!/bin/bash
 # run.sh: fuzz one libFuzzer harness for a fixed time, the ctest tests
-# fuzz_frames_run, fuzz_commands_run, fuzz_config_run, fuzz_control_run
-# and fuzz_script_run of a -DWSG_FUZZ=ON build (clang).
+# fuzz_H_run (H = frames, commands, config, control, script, gcl, match)
+# of a -DWSG_FUZZ=ON build (clang).
 # libFuzzer starts from a fresh copy of the committed seed corpus in the
 # build tree and adds what it finds interesting to that copy only: the
 # source tree is never written.
