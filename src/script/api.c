@@ -825,14 +825,8 @@ static const char *const prelude[] = {
     "    return ((u(x) << n) | (u(x) >> (32 - n))) & M\n", "  end,\n", "}\n",
     "bit32.btest = function(...) return bit32.band(...) ~= 0 end\n",
     "bit32.rrotate = function(x, n) return bit32.lrotate(x, -n) end\n",
-    /* table.move walks any range of nils, in C where the count hook
-     * cannot preempt it: a move of more than 2^24 elements is refused. */
-    "string.gfind = string.gmatch\n",
-    "local tmove, error = table.move, error\n",
-    "table.move = function(a1, f, e, t, a2)\n",
-    "  if math.type(f) and math.type(e) and e - f >= 2^24 then\n",
-    "    error('move: more than 2^24 elements', 2)\n", "  end\n",
-    "  return tmove(a1, f, e, t, a2)\n", "end\n", NULL};
+    /* Lua 5.1's name of gmatch. */
+    "string.gfind = string.gmatch\n", NULL};
 
 /* lua_load's reader over the prelude's pieces (C99 caps a string literal
  * at 4095 bytes, so the prelude is an array of them). */
@@ -875,13 +869,14 @@ void wsg_script_open_api(lua_State *L, struct wsg_script *h)
     set_nil(L, NULL, base_out);
     set_nil(L, LUA_OSLIBNAME, os_out);
     set_nil(L, LUA_LOADLIBNAME, package_out);
-    /* The pattern functions that yield across themselves (strlib.c), and
-     * the functions that resume and catch (coro.c), before the prelude
-     * keeps any of them. */
+    /* The pattern functions that yield across themselves (strlib.c), the
+     * functions that resume and catch (coro.c), and those whose work is
+     * counted (costs.c), before the prelude keeps any of them. */
     lua_getglobal(L, LUA_STRLIBNAME);
     wsg_strlib_open(L, &h->slice);
     lua_pop(L, 1);
     wsg_script_open_coro(L);
+    wsg_script_open_costs(L);
     /* require: modules from the script's directory, Lua text only (the
      * preload, then api_searcher). package.path tells where, for scripts
      * that read it; changing it changes nothing. */

@@ -192,30 +192,33 @@ static int co_wrap(lua_State *L)
     return 1;
 }
 
-/* load: Lua's, whose failure (nil and a message: the reader raised an
- * error) is passed on as an error where it must be. */
+/* load: Lua's, called in this frame (so that its errors name it), whose
+ * failure (nil and a message: the reader raised an error) is passed on
+ * as an error where it must be. Compiling is work: a step a byte. */
 static int api_load(lua_State *L)
 {
-    int n = lua_gettop(L);
+    lua_CFunction load = lua_tocfunction(L, lua_upvalueindex(1));
+    size_t len = 0;
+    int n;
 
-    lua_pushvalue(L, lua_upvalueindex(1));
-    lua_insert(L, 1);
-    lua_call(L, n, LUA_MULTRET);
-    if (lua_gettop(L) >= 2 && !lua_toboolean(L, 1) &&
-        wsg_script_doomed(wsg_script_of(L), L)) {
-        lua_settop(L, 2);
+    if (lua_type(L, 1) == LUA_TSTRING)
+        lua_tolstring(L, 1, &len);
+    n = load(L);
+    wsg_script_spend(wsg_script_of(L), L,
+                     len > UINT32_MAX ? UINT32_MAX : (uint32_t)len);
+    if (n == 2 && lua_isnil(L, -2) && wsg_script_doomed(wsg_script_of(L), L))
         return lua_error(L);
-    }
-    return pay(L, lua_gettop(L));
+    return pay(L, n);
 }
 
-/* coroutine.close: Lua's, but for a coroutine that ended in an error,
- * whose to-be-closed variables stay as they are (wrap_end): false and
- * its error. */
+/* coroutine.close: Lua's (in this frame), but for a coroutine that ended
+ * in an error, whose to-be-closed variables stay as they are (wrap_end):
+ * false and its error. */
 static int co_close(lua_State *L)
 {
+    lua_CFunction close = lua_tocfunction(L, lua_upvalueindex(1));
     lua_State *co = co_arg(L);
-    int st = lua_status(co);
+    int st = lua_status(co), n;
 
     if (st != LUA_OK && st != LUA_YIELD) {
         lua_pushboolean(L, 0);
@@ -227,15 +230,11 @@ static int co_close(lua_State *L)
         }
         return 2;
     }
-    lua_pushvalue(L, lua_upvalueindex(1));
-    lua_insert(L, 1);
-    lua_call(L, lua_gettop(L) - 1, LUA_MULTRET);
-    if (lua_gettop(L) >= 2 && !lua_toboolean(L, 1) &&
-        wsg_script_doomed(wsg_script_of(L), L)) {
-        lua_settop(L, 2);
+    n = close(L);
+    if (n == 2 && !lua_toboolean(L, -2) &&
+        wsg_script_doomed(wsg_script_of(L), L))
         return lua_error(L);
-    }
-    return pay(L, lua_gettop(L));
+    return pay(L, n);
 }
 
 /* pcall, as Lua's: its results above the true at 1. */

@@ -132,5 +132,8 @@ int wsg_script_doomed(struct wsg_script *h, lua_State *L);
 /* coroutine.resume, wrap, close, pcall, xpcall and load, over Lua's
  * (coro.c), in the libraries opened in L. */
 void wsg_script_open_coro(lua_State *L);
+/* The library functions whose work is spent from the slice, and
+ * table.move, which yields across itself (costs.c). */
+void wsg_script_open_costs(lua_State *L);
 
 #endif

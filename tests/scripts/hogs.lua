@@ -94,6 +94,35 @@ hogs[10] = function()
   end
 end
 
+-- Library calls that work without instructions or allocation, in a loop:
+-- full collections of 8 MB of tables,
+hogs[11] = function()
+  local keep = {}
+  for i = 1, 100000 do keep[i] = {i} end
+  return function() return collectgarbage() end
+end
+
+-- utf8.len of a megabyte,
+hogs[12] = function()
+  local s = ("\u{e9}"):rep(500000)
+  return function() return utf8.len(s) end
+end
+
+-- insert and remove at the front of 200,000 elements,
+hogs[13] = function()
+  local t = {}
+  for i = 1, 200000 do t[i] = i end
+  return function()
+    table.insert(t, 1, 0)
+    return table.remove(t, 1)
+  end
+end
+
+-- and a move of 2^24 - 1 elements.
+hogs[14] = function()
+  return function() return table.move({}, 1, (1 << 24) - 1, 2) end
+end
+
 cmd.register(0xB0)
 local _, p = cmd.read()
 local hog = hogs[p[1]]()
