@@ -4,8 +4,14 @@
  * next. The script's body runs as a coroutine; the host resumes it when
  * what it waits for has come (a packet, its time, the processor) and
  * tells the owner, through wsg_script_next and the wake callback, what
- * that is. The memory cap is the allocator's; preemption is a count hook
- * that yields the body when its slice is used up.
+ * that is. The memory cap is the allocator's. Preemption ends a slice of
+ * steps, spent by the count hook (instructions), the allocator (bytes)
+ * and library functions (their work): where the running code can yield
+ * to the host (the body, or a coroutine the body resumed, through
+ * coro.c), it yields; elsewhere it runs on within an allowance of stuck
+ * slices that is the script's, not the stretch's. A module is opened
+ * below the script's directory one component at a time, following no
+ * link.
  */
 #define _GNU_SOURCE /* realpath, O_NOFOLLOW, O_DIRECTORY, openat */
 

@@ -7,7 +7,9 @@
  *
  * The script runs as a coroutine inside the daemon's loop, without threads.
  * It runs until it waits (cmd.read with nothing queued, sleep) or until
- * its slice of instructions is used up; then it yields and the host keeps
+ * its slice of steps is used up (instructions, and the work of library
+ * functions: a long pattern match, a long move, yields across the call);
+ * then it yields and the host keeps
  * what it waits for:
  *   - a packet: delivered from the device's hook as it arrives, and the
  *     script resumed at once, so an answer leaves in the same batch;
@@ -35,8 +37,9 @@
 
 /* Default memory cap of a script (--script-memory). */
 #define WSG_SCRIPT_MEMORY_DEFAULT (16u << 20)
-/* Instructions a script runs before it is preempted: well under a
- * millisecond on these machines, so every interface keeps answering. */
+/* Steps a script runs before it is preempted (an instruction is one, a
+ * library function counts its work in them): a millisecond or less on
+ * these machines, so every interface keeps answering. */
 #define WSG_SCRIPT_SLICE 100000u
 /* Packets for the script that wait to be read; one more is answered
  * E_OVERRUN, as the firmware answers a queue that is full. */
