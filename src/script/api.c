@@ -302,11 +302,15 @@ static int cmd_send(lua_State *L)
     uint8_t id = api_byte(L, 1);
     struct wsg_session *s;
     char err[128];
+    size_t visits;
     long n;
     uint16_t crc;
 
     n = wsg_script_flatten(L, 2, h->tx + WSG_HEADER_LEN, WSG_SCRIPT_SEND_MAX,
-                           err, sizeof err);
+                           err, sizeof err, &visits);
+    /* Each value visited is a step of the slice (the bytes copied are
+     * fewer); the next instruction ends the slice when they use it up. */
+    wsg_script_spend(h, L, (uint32_t)visits);
     if (n < 0)
         return luaL_error(L, "cmd.send: %s", err);
     s = api_host(h);
@@ -437,7 +441,9 @@ static int mc_move(lua_State *L)
 {
     struct wsg_script *h = wsg_script_of(L);
     double w = api_motion_number(L, 1), v = api_motion_number(L, 2);
-    lua_Integer flags = luaL_optinteger(L, 3, 0);
+    /* 21h's flags byte: a value no byte can hold is an error, not its low
+     * bits. */
+    uint8_t flags = lua_isnoneornil(L, 3) ? 0 : api_byte(L, 3);
     uint16_t st = wsg_device_motion_check(h->dev, 1);
 
     if (st == WSG_E_SUCCESS)
@@ -457,10 +463,13 @@ static int mc_homing(lua_State *L)
     int dir = WSG_HOME_DEFAULT;
     uint16_t st;
 
+    /* As 20h's byte: 0, 1, 2 home, another byte is E_INVALID_PARAMETER
+     * (the axis says so); a value no byte can hold is an error, where an
+     * int would have kept its low bits (2^32 + 1 homed positive). */
     if (lua_isboolean(L, 1))
         dir = lua_toboolean(L, 1) ? WSG_HOME_POSITIVE : WSG_HOME_NEGATIVE;
     else if (!lua_isnoneornil(L, 1))
-        dir = (int)luaL_checkinteger(L, 1); /* as 20h: 0, 1, 2 */
+        dir = api_byte(L, 1);
     st = wsg_device_motion_check(h->dev, 0);
     if (st == WSG_E_SUCCESS)
         st = wsg_axis_request_homing(api_axis(L), dir, 0);
@@ -690,24 +699,25 @@ static int open_socket(lua_State *L)
  * directory, each dot of NAME a subdirectory, as Lua text. It reads the
  * directory the host keeps, not package.path, which the script can set
  * (to "/etc/?.lua" or "../?.lua"); with the dots turned into slashes no
- * name climbs out of the directory. Lua's own searcher would also load a
- * precompiled chunk, which no sandbox can trust. */
+ * name climbs out of the directory, and the file is opened one component
+ * at a time without following a link (wsg_script_loadmodule), so no link
+ * below the directory leads out of it either. Lua's own searcher would
+ * also load a precompiled chunk, which no sandbox can trust. */
 static int api_searcher(lua_State *L)
 {
     struct wsg_script *h = wsg_script_of(L);
-    const char *name = luaL_checkstring(L, 1), *path, *c;
+    const char *name = luaL_checkstring(L, 1), *path, *rel, *c;
     luaL_Buffer b;
     int r;
 
     luaL_buffinit(L, &b);
-    luaL_addstring(&b, h->dir);
-    luaL_addchar(&b, '/');
     for (c = name; *c; c++)
         luaL_addchar(&b, *c == '.' ? '/' : *c);
     luaL_addstring(&b, ".lua");
     luaL_pushresult(&b);
-    path = lua_tostring(L, -1);
-    r = wsg_script_loadfile(L, path);
+    rel = lua_tostring(L, -1);
+    path = lua_pushfstring(L, "%s/%s", h->dir, rel);
+    r = wsg_script_loadmodule(L, h->dir, rel, path);
     if (r == -ENOENT || r == -ENOTDIR) {
         lua_pushfstring(L, "no file '%s'", path);
         return 1;
@@ -818,54 +828,8 @@ static const char *const prelude[] = {
     "    return ((u(x) << n) | (u(x) >> (32 - n))) & M\n", "  end,\n", "}\n",
     "bit32.btest = function(...) return bit32.band(...) ~= 0 end\n",
     "bit32.rrotate = function(x, n) return bit32.lrotate(x, -n) end\n",
-    /* The library's C loops that the count hook cannot preempt and whose
-     * length memory does not bound: Lua's pattern matcher backtracks (a
-     * find of (".-"):rep(10).."b" in 100 bytes runs for hours), and
-     * table.move walks any range of nils. A pattern function is refused
-     * when its worst case, C(n + k, k) steps for k repeating items (one
-     * more unless anchored with ^) on n bytes, exceeds 10^9 (about a
-     * second); a move of more than 2^24 elements is refused. */
-    "local sfind, smatch, sgmatch, sgsub = string.find, string.match,",
-    " string.gmatch, string.gsub\n",
-    "local ssub, tmove, error = string.sub, table.move, error\n",
-    "local function skipset(p, i, n)\n", "  i = i + 1\n",
-    "  if ssub(p, i, i) == '^' then i = i + 1 end\n", "  repeat\n",
-    "    if ssub(p, i, i) == '%' then i = i + 2 else i = i + 1 end\n",
-    "  until i > n or ssub(p, i, i) == ']'\n", "  return i + 1\n", "end\n",
-    "local function repeats(p)\n", "  local k, i, n = 0, 1, #p\n",
-    "  if ssub(p, 1, 1) ~= '^' then k = 1 else i = 2 end\n",
-    "  while i <= n do\n", "    local c, item = ssub(p, i, i), true\n",
-    "    if c == '%' then\n", "      local d = ssub(p, i + 1, i + 1)\n",
-    "      if d == 'b' then i = i + 4; item = false\n",
-    "      elseif d == 'f' then i = skipset(p, i + 2, n); item = false\n",
-    "      else i = i + 2 end\n",
-    "    elseif c == '[' then i = skipset(p, i, n)\n",
-    "    elseif c == '(' or c == ')' then i = i + 1; item = false\n",
-    "    else i = i + 1 end\n", "    local q = item and ssub(p, i, i) or ''\n",
-    "    if q == '*' or q == '+' or q == '-' or q == '?' then\n",
-    "      k = k + 1; i = i + 1\n", "    end\n", "  end\n", "  return k\n",
-    "end\n", "local function guard(fn, s, p)\n",
-    "  if type(s) ~= 'string' and type(s) ~= 'number' then return end\n",
-    "  if type(p) ~= 'string' then return end\n",
-    "  local n, k, cost = #tostring(s), repeats(p), 1\n",
-    "  for j = 1, k do\n", "    cost = cost * (n + j) / j\n",
-    "    if cost > 1e9 then\n",
-    "      error(fn .. ': pattern too costly for a subject of ' .. n ..\n",
-    "            ' bytes (' .. k .. ' repeating items could backtrack for'\n",
-    "            .. ' minutes)', 3)\n", "    end\n", "  end\n", "end\n",
-    "string.find = function(s, p, init, plain)\n",
-    "  if not plain then guard('find', s, p) end\n",
-    "  return sfind(s, p, init, plain)\n", "end\n",
-    "string.match = function(s, p, ...)\n", "  guard('match', s, p)\n",
-    "  return smatch(s, p, ...)\n", "end\n",
-    "string.gmatch = function(s, p, ...)\n", "  guard('gmatch', s, p)\n",
-    "  return sgmatch(s, p, ...)\n", "end\n",
-    "string.gsub = function(s, p, ...)\n", "  guard('gsub', s, p)\n",
-    "  return sgsub(s, p, ...)\n", "end\n", "string.gfind = string.gmatch\n",
-    "table.move = function(a1, f, e, t, a2)\n",
-    "  if math.type(f) and math.type(e) and e - f >= 2^24 then\n",
-    "    error('move: more than 2^24 elements', 2)\n", "  end\n",
-    "  return tmove(a1, f, e, t, a2)\n", "end\n", NULL};
+    /* Lua 5.1's name of gmatch. */
+    "string.gfind = string.gmatch\n", NULL};
 
 /* lua_load's reader over the prelude's pieces (C99 caps a string literal
  * at 4095 bytes, so the prelude is an array of them). */
@@ -908,6 +872,14 @@ void wsg_script_open_api(lua_State *L, struct wsg_script *h)
     set_nil(L, NULL, base_out);
     set_nil(L, LUA_OSLIBNAME, os_out);
     set_nil(L, LUA_LOADLIBNAME, package_out);
+    /* The pattern functions that yield across themselves (strlib.c), the
+     * functions that resume and catch (coro.c), and those whose work is
+     * counted (costs.c), before the prelude keeps any of them. */
+    lua_getglobal(L, LUA_STRLIBNAME);
+    wsg_strlib_open(L, &h->slice);
+    lua_pop(L, 1);
+    wsg_script_open_coro(L);
+    wsg_script_open_costs(L);
     /* require: modules from the script's directory, Lua text only (the
      * preload, then api_searcher). package.path tells where, for scripts
      * that read it; changing it changes nothing. */

@@ -5,6 +5,12 @@
  * cannot run (or yield, or loop) in the middle of a send, and it reports
  * errors instead of raising them, so the caller decides how the script
  * hears of them and the fuzzer can call it outside a protected call.
+ *
+ * A table may be an element of another many times, and nesting multiplies
+ * that: five levels of 100 references to one table are 100^5 values to
+ * visit, all of them empty strings that add nothing to the payload. So it
+ * counts the values it visits, not only the bytes it writes, and gives up
+ * past WSG_SCRIPT_SEND_VISITS.
  */
 #include <stdio.h>
 
@@ -15,6 +21,7 @@
 struct flat {
     uint8_t *out;
     size_t cap, len;
+    size_t visits;
     char *err;
     size_t errlen;
 };
@@ -43,6 +50,13 @@ static int flat_value(lua_State *L, struct flat *f, int depth)
     size_t len;
     int isint;
 
+    if (++f->visits > WSG_SCRIPT_SEND_VISITS) {
+        snprintf(f->err, f->errlen,
+                 "more than %lu values (tables nested or repeated too "
+                 "often)",
+                 (unsigned long)WSG_SCRIPT_SEND_VISITS);
+        return -1;
+    }
     switch (lua_type(L, -1)) {
     case LUA_TNUMBER:
         v = lua_tointegerx(L, -1, &isint);
@@ -93,22 +107,27 @@ full:
 }
 
 long wsg_script_flatten(lua_State *L, int first, uint8_t *out, size_t cap,
-                        char *err, size_t errlen)
+                        char *err, size_t errlen, size_t *visits)
 {
-    struct flat f = {out, cap, 0, err, errlen};
+    struct flat f = {out, cap, 0, 0, err, errlen};
     int i, top = lua_gettop(L);
+    long r = -1;
 
     if (!lua_checkstack(L, 2)) {
         snprintf(err, errlen, "out of stack");
-        return -1;
+        goto out;
     }
     for (i = first; i <= top; i++) {
         lua_pushvalue(L, i);
         if (flat_value(L, &f, 0) < 0) {
             lua_settop(L, top);
-            return -1;
+            goto out;
         }
         lua_pop(L, 1);
     }
-    return (long)f.len;
+    r = (long)f.len;
+out:
+    if (visits)
+        *visits = f.visits;
+    return r;
 }

@@ -4,10 +4,16 @@
  * next. The script's body runs as a coroutine; the host resumes it when
  * what it waits for has come (a packet, its time, the processor) and
  * tells the owner, through wsg_script_next and the wake callback, what
- * that is. The memory cap is the allocator's; preemption is a count hook
- * that yields the body when its slice is used up.
+ * that is. The memory cap is the allocator's. Preemption ends a slice of
+ * steps, spent by the count hook (instructions), the allocator (bytes)
+ * and library functions (their work): where the running code can yield
+ * to the host (the body, or a coroutine the body resumed, through
+ * coro.c), it yields; elsewhere it runs on within an allowance of stuck
+ * slices that is the script's, not the stretch's. A module is opened
+ * below the script's directory one component at a time, following no
+ * link.
  */
-#define _GNU_SOURCE /* realpath, O_NOFOLLOW, openat */
+#define _GNU_SOURCE /* realpath, O_NOFOLLOW, O_DIRECTORY, openat */
 
 #include "script_impl.h"
 
@@ -23,27 +29,61 @@
 
 /* The count hook runs every this many instructions. */
 #define WSG_SCRIPT_HOOK_COUNT 1000
-/* Slices a script may run where it cannot yield (inside a coroutine of its
- * own, a metamethod called from C, a sort's comparison) before it is
- * stopped: a few hundred milliseconds of a frozen loop at most. */
-#define WSG_SCRIPT_STUCK_MAX 300u
+/* Bytes an allocation may take for a step: copying a string, filling a
+ * table, which a single instruction (a concatenation) can do by the
+ * megabyte. */
+#define WSG_SCRIPT_BYTES_PER_STEP 16
 /* Memory the host may use past the cap to report a failure. */
 #define WSG_SCRIPT_HEADROOM (256u << 10)
 /* The smallest cap: the libraries alone take some 100 KiB, and they are
  * opened where a failed allocation could not be caught. */
 #define WSG_SCRIPT_MEMORY_MIN (1u << 20)
 
+static void script_hook(lua_State *L, lua_Debug *ar);
+
 uint64_t wsg_script_now(const struct wsg_script *h)
 {
     return wsg_axis_time(wsg_device_axis_const(h->dev));
 }
 
+int wsg_script_preemptible(struct wsg_script *h, lua_State *L)
+{
+    if (!lua_isyieldable(L))
+        return 0;
+    if (h->nest == 0)
+        return L == h->co;
+    if (h->nest > WSG_SCRIPT_NEST_CO)
+        return 0;
+    return L == h->nested[h->nest - 1].co && h->nested[h->nest - 1].reach;
+}
+
+/* The slice is used up: the count hook comes at L's next instruction, not
+ * up to a thousand instructions on (each of which could be another call
+ * that works for a slice). The hook puts the count back. */
+static void script_arm(lua_State *L)
+{
+    if (L && lua_gethookcount(L) != 1)
+        lua_sethook(L, script_hook, LUA_MASKCOUNT, 1);
+}
+
+void wsg_script_spend(struct wsg_script *h, lua_State *L, uint32_t steps)
+{
+    if (steps < h->budget) {
+        h->budget -= steps;
+        return;
+    }
+    h->budget = 0;
+    script_arm(L);
+}
+
 /* The allocator: every byte the state holds is counted against the cap,
- * and an allocation past it fails as Lua expects ("not enough memory"). */
+ * and an allocation past it fails as Lua expects ("not enough memory").
+ * What it grows by is work done, spent from the slice: a concatenation
+ * or a library call can copy megabytes in one instruction. */
 static void *script_alloc(void *ud, void *ptr, size_t osize, size_t nsize)
 {
     struct wsg_script *h = ud;
-    size_t old = ptr ? osize : 0;
+    size_t old = ptr ? osize : 0, grow;
     void *p;
 
     if (nsize == 0) {
@@ -57,51 +97,102 @@ static void *script_alloc(void *ud, void *ptr, size_t osize, size_t nsize)
     if (!p)
         return NULL;
     h->memory = h->memory - old + nsize;
+    if (nsize > old) {
+        grow = (nsize - old) / WSG_SCRIPT_BYTES_PER_STEP;
+        wsg_script_spend(h, h->running,
+                         grow > UINT32_MAX ? UINT32_MAX : (uint32_t)grow);
+    }
     return p;
 }
 
-/* Preemption: the body yields when its slice is used up. Where it cannot
- * (a coroutine of the script's own, whose resume would get the yield, or
- * a call from C), it runs on, owing the yield, and a loop that never gets
- * out is ended with an error. The yield owed is paid at the body's next
- * hook, whatever is left of the slice then: the error may come back to a
- * body that loops on it (pcall around a stuck coroutine), and the slices
- * would otherwise keep running out in the coroutine, never in the body.
- * Until the body has paid, every hook outside it raises the error again,
- * so such a loop costs a hook's instructions a turn, not a slice's. */
+static int script_stuck_error(lua_State *L)
+{
+    /* %d: lua_pushfstring knows no %u, and would raise its own error
+     * in place of this one. */
+    return luaL_error(L,
+                      "ran %d slices of %d steps where it cannot be "
+                      "preempted (in a function called from C: a "
+                      "metamethod, a message handler, a load reader): "
+                      "stopped",
+                      (int)WSG_SCRIPT_STUCK_MAX, (int)WSG_SCRIPT_SLICE);
+}
+
+int wsg_script_doomed(struct wsg_script *h, lua_State *L)
+{
+    return h->stuck >= WSG_SCRIPT_STUCK_MAX && !wsg_script_preemptible(h, L);
+}
+
+int wsg_script_slice_over(struct wsg_script *h, lua_State *L)
+{
+    h->budget = WSG_SCRIPT_SLICE;
+    /* The host's own calls (the traceback) are not the script's. */
+    if (L == h->L)
+        return 0;
+    if (wsg_script_preemptible(h, L)) {
+        h->state = WSG_SCRIPT_RUNNABLE;
+        h->preempted++;
+        h->preempting = 1;
+        return 1;
+    }
+    h->owed = 1;
+    if (h->stuck < WSG_SCRIPT_STUCK_MAX)
+        h->stuck++;
+    if (h->stuck >= WSG_SCRIPT_STUCK_MAX)
+        script_stuck_error(L);
+    return 0;
+}
+
+/* Preemption: the slice is used up, by instructions (counted here) or by
+ * work (wsg_script_spend). Where the running code can yield to the host,
+ * it yields. Where it cannot (a function called from C), it runs on,
+ * owing the yield, and a stretch of WSG_SCRIPT_STUCK_MAX slices there
+ * ends in an error. The yield owed is paid at the next hook where the
+ * code can yield, whatever is left of the slice then: the error may come
+ * back to a loop that catches it, and the slices would otherwise keep
+ * running out where no yield is possible. Until the allowance comes back
+ * (one slice a turn), every hook where the code cannot yield raises the
+ * error again, so such a loop costs a hook's instructions a turn, not a
+ * slice's; and the functions that catch errors pass it on there
+ * (wsg_script_doomed). */
 static void script_hook(lua_State *L, lua_Debug *ar)
 {
     struct wsg_script *h = wsg_script_of(L);
-    int body = L == h->co && lua_isyieldable(L);
+    uint32_t ran = (uint32_t)lua_gethookcount(L);
+    int pre = wsg_script_preemptible(h, L);
 
     (void)ar;
-    if (body && h->owed) {
+    if (ran != WSG_SCRIPT_HOOK_COUNT)
+        lua_sethook(L, script_hook, LUA_MASKCOUNT, WSG_SCRIPT_HOOK_COUNT);
+    if (!pre && h->stuck >= WSG_SCRIPT_STUCK_MAX)
+        script_stuck_error(L);
+    if (pre && h->owed) {
         h->budget = 0;
-    } else if (h->budget > WSG_SCRIPT_HOOK_COUNT) {
-        h->budget -= WSG_SCRIPT_HOOK_COUNT;
-        if (body || h->stuck < WSG_SCRIPT_STUCK_MAX)
-            return;
-    }
-    if (body) {
-        h->budget = WSG_SCRIPT_SLICE;
-        h->state = WSG_SCRIPT_RUNNABLE;
-        h->preempted++;
-        lua_yield(L, 0);
+    } else if (h->budget > ran) {
+        h->budget -= ran;
         return;
     }
-    if (h->budget <= WSG_SCRIPT_HOOK_COUNT) {
-        h->budget = WSG_SCRIPT_SLICE;
-        h->owed = 1;
-        h->stuck++;
-    }
-    /* %d: lua_pushfstring knows no %u, and would raise its own error
-     * in place of this one. */
-    if (h->stuck >= WSG_SCRIPT_STUCK_MAX)
-        luaL_error(L,
-                   "ran %d slices of %d instructions where it cannot be "
-                   "preempted (in a coroutine of its own or a callback): "
-                   "stopped",
-                   (int)WSG_SCRIPT_STUCK_MAX, (int)WSG_SCRIPT_SLICE);
+    if (wsg_script_slice_over(h, L))
+        lua_yield(L, 0);
+}
+
+/* The string functions' view of the slice (strlib.h). */
+static uint32_t budget_left(void *ctx, lua_State *L)
+{
+    struct wsg_script *h = ctx;
+
+    if (h->owed && wsg_script_preemptible(h, L))
+        return 0;
+    return h->budget;
+}
+
+static void budget_spend(void *ctx, lua_State *L, uint32_t steps)
+{
+    wsg_script_spend(ctx, L, steps);
+}
+
+static int budget_over(void *ctx, lua_State *L)
+{
+    return wsg_script_slice_over(ctx, L);
 }
 
 void wsg_script_print(struct wsg_script *h, const char *text, size_t len)
@@ -213,9 +304,18 @@ static void script_resume(struct wsg_script *h, int nargs)
 
     h->state = WSG_SCRIPT_RUNNING;
     h->budget = WSG_SCRIPT_SLICE;
-    h->stuck = 0;
+    /* A turn: one stuck slice is earned back, not all of them, or a loop
+     * that gets stuck again at once would stall the daemon for the whole
+     * allowance at every turn. */
+    if (h->stuck > 0)
+        h->stuck--;
     h->owed = 0;
+    h->preempting = 0;
+    h->nest = 0;
+    h->running = h->co;
     st = lua_resume(h->co, h->L, nargs, &nres);
+    h->running = NULL;
+    h->preempting = 0;
     if (st == LUA_YIELD) {
         lua_pop(h->co, nres);
         if (h->state == WSG_SCRIPT_RUNNING) {
@@ -421,6 +521,76 @@ int wsg_script_loadfile(lua_State *L, const char *path)
     return r;
 }
 
+/* Open rel below the directory dir, one component at a time, following
+ * no link: each directory is opened with O_NOFOLLOW from the one before,
+ * so a link anywhere in rel (to a directory outside, or swapped in for
+ * one after a check) fails with ELOOP. Empty components are skipped, as
+ * a path resolves "a//b". An fd, or -errno. */
+static int script_open_beneath(const char *dir, const char *rel)
+{
+    char comp[WSG_SCRIPT_PATH_MAX];
+    const char *p = rel, *end;
+    int dfd, fd;
+    size_t n;
+
+    dfd = open(dir, O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+    if (dfd < 0)
+        return -errno;
+    for (;;) {
+        while (*p == '/')
+            p++;
+        end = strchr(p, '/');
+        n = end ? (size_t)(end - p) : strlen(p);
+        if (n >= sizeof comp) {
+            fd = -ENAMETOOLONG;
+            break;
+        }
+        memcpy(comp, p, n);
+        comp[n] = '\0';
+        p += n;
+        while (*p == '/')
+            p++;
+        if (*p == '\0') {
+            /* O_NONBLOCK: a FIFO is refused by load_fd, not waited on. */
+            fd = openat(dfd, comp,
+                        O_RDONLY | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC);
+            if (fd < 0)
+                fd = -errno;
+            break;
+        }
+        fd =
+            openat(dfd, comp, O_RDONLY | O_DIRECTORY | O_NOFOLLOW | O_CLOEXEC);
+        if (fd < 0) {
+            struct stat st;
+
+            /* Linux says ENOTDIR for a link where O_DIRECTORY wants a
+             * directory: a link is ELOOP here as at the end. */
+            fd = -errno;
+            if (fd == -ENOTDIR &&
+                fstatat(dfd, comp, &st, AT_SYMLINK_NOFOLLOW) == 0 &&
+                S_ISLNK(st.st_mode))
+                fd = -ELOOP;
+            break;
+        }
+        close(dfd);
+        dfd = fd;
+    }
+    close(dfd);
+    return fd;
+}
+
+int wsg_script_loadmodule(lua_State *L, const char *dir, const char *rel,
+                          const char *name)
+{
+    int fd = script_open_beneath(dir, rel), r;
+
+    if (fd < 0)
+        return fd;
+    r = load_fd(L, fd, name);
+    close(fd);
+    return r;
+}
+
 /* Load the file (read from fd) as the body of a fresh state. 0, or
  * -errno/-EINVAL with the reason in err (a compile error fails the
  * script). */
@@ -430,6 +600,12 @@ static int script_load(struct wsg_script *h, int fd, char *err, size_t errlen)
 
     h->memory = 0;
     h->limit = h->cfg.memory_max;
+    h->stuck = 0;
+    h->running = NULL;
+    h->slice.left = budget_left;
+    h->slice.spend = budget_spend;
+    h->slice.over = budget_over;
+    h->slice.ctx = h;
     h->L = lua_newstate(script_alloc, h);
     if (!h->L) {
         snprintf(err, errlen, "not enough memory for a Lua state");

@@ -7,7 +7,9 @@
  *
  * The script runs as a coroutine inside the daemon's loop, without threads.
  * It runs until it waits (cmd.read with nothing queued, sleep) or until
- * its slice of instructions is used up; then it yields and the host keeps
+ * its slice of steps is used up (instructions, and the work of library
+ * functions: a long pattern match, a long move, yields across the call);
+ * then it yields and the host keeps
  * what it waits for:
  *   - a packet: delivered from the device's hook as it arrives, and the
  *     script resumed at once, so an answer leaves in the same batch;
@@ -35,8 +37,9 @@
 
 /* Default memory cap of a script (--script-memory). */
 #define WSG_SCRIPT_MEMORY_DEFAULT (16u << 20)
-/* Instructions a script runs before it is preempted: well under a
- * millisecond on these machines, so every interface keeps answering. */
+/* Steps a script runs before it is preempted (an instruction is one, a
+ * library function counts its work in them): a millisecond or less on
+ * these machines, so every interface keeps answering. */
 #define WSG_SCRIPT_SLICE 100000u
 /* Packets for the script that wait to be read; one more is answered
  * E_OVERRUN, as the firmware answers a queue that is full. */
@@ -142,12 +145,18 @@ void wsg_script_run(struct wsg_script *h);
  * L's stack from index first to the top, in order, into out: a number in
  * 0..255 is a byte, a boolean 0 or 1, a string its bytes, a table its
  * elements 1..#t (raw, no metamethods), nested at most
- * WSG_SCRIPT_NEST_MAX deep. Returns the bytes written, or -1 with the
- * reason in err (a number out of range, another type, too deep, more than
- * cap bytes). It never raises a Lua error. */
+ * WSG_SCRIPT_NEST_MAX deep, visiting at most WSG_SCRIPT_SEND_VISITS
+ * values (each argument and each element, a table repeated counted each
+ * time). Returns the bytes written, or -1 with the reason in err (a
+ * number out of range, another type, too deep, too many values, more than
+ * cap bytes). The values it visited go to *visits (unless NULL). It never
+ * raises a Lua error. */
 #define WSG_SCRIPT_NEST_MAX 5
+/* Twice a payload of single bytes, each in a table of its own: 2^17
+ * values, a millisecond or two. */
+#define WSG_SCRIPT_SEND_VISITS (1ul << 17)
 struct lua_State;
 long wsg_script_flatten(struct lua_State *L, int first, uint8_t *out,
-                        size_t cap, char *err, size_t errlen);
+                        size_t cap, char *err, size_t errlen, size_t *visits);
 
 #endif

@@ -10,10 +10,15 @@
 #include <lua.h>
 
 #include "script.h"
+#include "strlib.h"
 #include "wsg/proto.h"
 
 /* A path as realpath writes one (PATH_MAX on Linux). */
 #define WSG_SCRIPT_PATH_MAX 4096
+/* Coroutines resumed inside each other that the host keeps track of;
+ * deeper ones run on, but cannot be preempted. Lua stops at some 200
+ * (its C stack). */
+#define WSG_SCRIPT_NEST_CO 256
 
 /* A packet for the script, waiting in cmd.read's queue. */
 struct wsg_script_packet {
@@ -37,9 +42,22 @@ struct wsg_script {
     int quote; /* compile errors may quote the text: in the script dir */
     size_t memory;
     size_t limit;    /* what the allocator allows: the cap, or past it */
-    uint32_t budget; /* instructions left in this slice */
-    unsigned stuck;  /* slices run where the script could not yield */
-    int owed;        /* a slice ran out where it could not yield */
+    uint32_t budget; /* steps left in this slice (instructions, work) */
+    /* Slices run where the script could not yield, not yet earned back:
+     * one comes back with each turn the script gets. The script's, not a
+     * coroutine's or a call's: a fresh one starts with what is left. */
+    unsigned stuck;
+    int owed;           /* a slice ran out where it could not yield */
+    int preempting;     /* a preemption's yield is on its way to the host */
+    lua_State *running; /* the script's thread running now; NULL: none */
+    /* The script's coroutines resumed now, outermost first, and whether
+     * each one's yield can reach the host (its resumer's could). */
+    unsigned nest;
+    struct {
+        lua_State *co;
+        int reach;
+    } nested[WSG_SCRIPT_NEST_CO];
+    struct wsg_budget slice; /* the string functions' view of the slice */
     uint64_t preempted;
     uint32_t reply_tag; /* session of the packet read last; 0: none */
     struct wsg_script_packet queue[WSG_SCRIPT_QUEUE];
@@ -68,6 +86,11 @@ static inline struct wsg_script *wsg_script_of(lua_State *L)
  * when it cannot be read: -ELOOP for a link, -EFBIG past
  * WSG_SCRIPT_SOURCE_MAX. */
 int wsg_script_loadfile(lua_State *L, const char *path);
+/* The same for a module: the file rel below the directory dir, opened
+ * one component at a time without following a link anywhere in rel
+ * (-ELOOP), named "@name" in messages. */
+int wsg_script_loadmodule(lua_State *L, const char *dir, const char *rel,
+                          const char *name);
 
 /* Open the script's libraries (api.c) in L: the sandboxed standard ones,
  * the gripper's and the Lua 5.1/5.2 names. */
@@ -80,5 +103,38 @@ void wsg_script_print(struct wsg_script *h, const char *text, size_t len);
 int wsg_script_take(struct wsg_script *h, lua_State *L);
 /* The simulated time now, us. */
 uint64_t wsg_script_now(const struct wsg_script *h);
+
+/* ---- the slice (host.c) ----
+ * A script runs in slices of WSG_SCRIPT_SLICE steps: instructions,
+ * counted by the count hook, and the work of library functions, counted
+ * by them. Where the running code can yield to the host (the body, or a
+ * coroutine the body resumed, and not inside a callback from C), the end
+ * of a slice is a yield, carried through the coroutines that resumed it;
+ * elsewhere it goes on, and a stretch of WSG_SCRIPT_STUCK_MAX slices
+ * there ends in an error. */
+/* Slices a script may run at a stretch where it cannot yield; they come
+ * back one a turn. */
+#define WSG_SCRIPT_STUCK_MAX 20u
+
+/* L's yield can reach the host now. */
+int wsg_script_preemptible(struct wsg_script *h, lua_State *L);
+/* Steps of work L did. When they use up the slice, the count hook comes
+ * at L's next instruction to end it there. */
+void wsg_script_spend(struct wsg_script *h, lua_State *L, uint32_t steps);
+/* The slice is over in L (which is not inside the count hook). 1: L must
+ * yield now (lua_yieldk; the host has been told). 0: it cannot, and goes
+ * on with a fresh slice. Raises the stuck error past the allowance. */
+int wsg_script_slice_over(struct wsg_script *h, lua_State *L);
+/* The allowance is used up and L cannot yield: an error caught here must
+ * go on up, to where the script can be preempted (pcall, xpcall,
+ * coroutine.resume, close and load re-raise it), or a loop catching it
+ * would never let the daemon go. */
+int wsg_script_doomed(struct wsg_script *h, lua_State *L);
+/* coroutine.resume, wrap, close, pcall, xpcall and load, over Lua's
+ * (coro.c), in the libraries opened in L. */
+void wsg_script_open_coro(lua_State *L);
+/* The library functions whose work is spent from the slice, and
+ * table.move, which yields across itself (costs.c). */
+void wsg_script_open_costs(lua_State *L);
 
 #endif

@@ -7,11 +7,13 @@
  * whole and not, NaN, strings with NULs and past 64 KiB, nil, functions,
  * userdata, threads, tables nested past the five levels allowed, with
  * holes, with keys beyond their sequence, with metatables whose __len and
- * __index would lie, and tables that contain themselves), then calls
+ * __index would lie, tables that contain themselves, and tables shared by
+ * several others, which multiply what a send visits), then calls
  * wsg_script_flatten on them directly, outside any protected call. This
  * file keeps its own model of every value built and flattens that model
  * the way docs/scripting.md says cmd.send does; the function must return
- * -1 or exactly the bytes of that reference, write nothing past its cap or
+ * -1 or exactly the bytes of that reference, having visited as many values
+ * as the model (never more than the bound), write nothing past its cap or
  * its error buffer, leave the stack as it found it, call no metamethod and
  * never raise (a raise here reaches the panic handler, which aborts).
  *
@@ -392,13 +394,18 @@ static int fa_put(uint8_t *out, size_t cap, size_t *len, uint8_t v)
     return 0;
 }
 
-/* The reference: node k at table depth depth into out, from the model. */
-static int fa_ref(int k, int depth, uint8_t *out, size_t cap, size_t *len)
+/* The reference: node k at table depth depth into out, from the model,
+ * counting the values visited in *visits (each one once per visit, the
+ * failing one too), at most WSG_SCRIPT_SEND_VISITS. */
+static int fa_ref(int k, int depth, uint8_t *out, size_t cap, size_t *len,
+                  size_t *visits)
 {
     const struct fa_node *n = &A.node[k];
     size_t border;
     int i;
 
+    if (++*visits > WSG_SCRIPT_SEND_VISITS)
+        return -1;
     switch (n->kind) {
     case FA_BOOL:
         return fa_put(out, cap, len, (uint8_t)n->i);
@@ -430,7 +437,8 @@ static int fa_ref(int k, int depth, uint8_t *out, size_t cap, size_t *len)
         FUZZ_CHECK(border == (size_t)n->nkids ||
                    A.kids[n->kid0 + (int)border] == 0);
         for (i = 0; i < (int)border; i++)
-            if (fa_ref(A.kids[n->kid0 + i], depth + 1, out, cap, len) < 0)
+            if (fa_ref(A.kids[n->kid0 + i], depth + 1, out, cap, len, visits) <
+                0)
                 return -1;
         return 0;
     default:
@@ -454,7 +462,7 @@ static void fa_run(struct rd *r)
 {
     static const size_t errlens[5] = {0, 1, 2, 16, 128};
     int args[8];
-    size_t cap, errlen, want_len = 0, i;
+    size_t cap, errlen, want_len = 0, want_visits = 0, visits, i;
     unsigned narg, first, pass;
     uint8_t *want;
     long want_n, n;
@@ -485,7 +493,7 @@ static void fa_run(struct rd *r)
     FUZZ_CHECK(want != NULL);
     want_n = 0;
     for (i = first - 1; i < narg; i++)
-        if (fa_ref(args[i], 0, want, cap, &want_len) < 0) {
+        if (fa_ref(args[i], 0, want, cap, &want_len, &want_visits) < 0) {
             want_n = -1;
             break;
         }
@@ -502,9 +510,12 @@ static void fa_run(struct rd *r)
         FUZZ_CHECK(out != NULL && err != NULL);
         memset(out, fill, cap + FA_GUARD);
         memset(err, 0x5A, errlen + FA_GUARD);
-        n = wsg_script_flatten(L, (int)first, out, cap, err, errlen);
+        n = wsg_script_flatten(L, (int)first, out, cap, err, errlen, &visits);
         FUZZ_CHECK(lua_gettop(L) == (int)narg);
         FUZZ_CHECK(A.meta_calls == 0);
+        /* As many values as the model visited, up to the one that
+         * failed: a table shared or nested is visited each time. */
+        FUZZ_CHECK(visits == want_visits);
         if (n != want_n)
             fprintf(stderr,
                     "fuzz_script: flatten gave %ld, the reference %ld "

@@ -7,6 +7,10 @@
  * corpus/script has the script harness's seeds (fuzz_script.c): values for
  * cmd.send's flattening, and each of its script's IDs, a full queue, a
  * preempted loop, the script's failure and end, orphaned answers.
+ * corpus/match has the pattern harness's (fuzz_match.c): each construct of
+ * the pattern language, the errors, and the patterns that held the daemon
+ * (%b(), a long set, a long literal, a plain find, a backtracking gsub) on
+ * subjects small enough for Lua's own matcher to answer.
  * The output is committed; rebuild it only to change the seeds (every
  * build compiles this program, so it stays in step with the harnesses):
  *
@@ -478,6 +482,147 @@ static void gen_script(const char *dir)
     sc_save(&g, dir, "script-library");
 }
 
+/* ---- the pattern harness (fuzz_match.c) ---- */
+
+/* Its call byte: the function, and what else is given. */
+#define FM_FIND     0x00
+#define FM_MATCH    0x01
+#define FM_GMATCH   0x02
+#define FM_GSUB     0x03
+#define FM_PLAIN    0x04
+#define FM_TABLE    0x08
+#define FM_JOIN     0x10
+#define FM_KEEP     0x18
+#define FM_ARG      0x20
+#define FM_NO_YIELD 0x40
+#define FM_TOKENS   0x80
+
+/* A length as the harness reads it: two bytes, little-endian. */
+static size_t gen_len(uint8_t *b, size_t len)
+{
+    b[0] = (uint8_t)(len & 0xFF);
+    b[1] = (uint8_t)(len >> 8);
+    return 2;
+}
+
+/* One input: the call, the slice's steps less one, the init or count,
+ * then the subject, the pattern and the replacement, each with its
+ * length. The subject is reps copies of s, the pattern preps of p. */
+static void gen_match_rep(const char *dir, const char *name, unsigned op,
+                          unsigned slice, int arg, const char *s,
+                          unsigned reps, const char *p, unsigned preps,
+                          const char *r)
+{
+    uint8_t b[4096];
+    size_t n = 0, ls = strlen(s) * reps, lp = strlen(p) * preps;
+    size_t lr = strlen(r), i;
+
+    if (ls > 1024 || lp > 1024 || lr > 255)
+        abort();
+    b[n++] = (uint8_t)op;
+    b[n++] = (uint8_t)slice;
+    b[n++] = (uint8_t)(int8_t)arg;
+    n += gen_len(b + n, ls);
+    for (i = 0; i < reps; i++) {
+        memcpy(b + n, s, strlen(s));
+        n += strlen(s);
+    }
+    n += gen_len(b + n, lp);
+    for (i = 0; i < preps; i++) {
+        memcpy(b + n, p, strlen(p));
+        n += strlen(p);
+    }
+    n += gen_len(b + n, lr);
+    memcpy(b + n, r, lr);
+    n += lr;
+    gen_write(dir, "match", name, b, n);
+}
+
+static void gen_match(const char *dir, const char *name, unsigned op,
+                      unsigned slice, int arg, const char *s, unsigned reps,
+                      const char *p, const char *r)
+{
+    gen_match_rep(dir, name, op, slice, arg, s, reps, p, 1, r);
+}
+
+static void gen_patterns(const char *dir)
+{
+    /* gsub by tokens: a ) . b + c - ? on "ab(abc a", into "<%1>". */
+    static const uint8_t tokens[] = {
+        0x83, 3, 0, 8, 0, 'a', 'b', '(', 'a', 'b', 'c', ' ', 'a', 8,  0,
+        0,    4, 6, 1, 8, 2,   9,   10,  4,   0,   '<', '%', '1', '>'};
+
+    /* What held the daemon, small: a slice of 1 step yields at each. */
+    gen_match(dir, "balance", FM_FIND, 0, 0, "(", 200, "%b()", "");
+    gen_match(dir, "balance-nested", FM_GMATCH, 2, 0, "x((a)(b))y(()", 1,
+              "%b()", "");
+    gen_match(dir, "long-set", FM_FIND, 5, 0, "b", 60,
+              "[aaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaa]", "");
+    gen_match(dir, "long-literal", FM_MATCH, 3, 0, "a", 200,
+              "aaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaab", "");
+    gen_match(dir, "plain-find", FM_FIND | FM_PLAIN, 0, 0, "a", 250,
+              "aaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaa"
+              "aaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaab",
+              "");
+    gen_match(dir, "gsub-backtrack", FM_GSUB, 7, 0, "a", 60, ".-.-b", "x");
+    gen_match(dir, "lazy-many", FM_FIND, 9, 0, "a", 200,
+              ".-.-.-.-.-.-.-.-.-.-a", "");
+    /* The language. */
+    gen_match(dir, "set-classes", FM_GMATCH, 4, 0, "  foo_bar9 = 1, _x2 ", 1,
+              "[%a_][%w_]*", "");
+    gen_match(dir, "captures", FM_MATCH, 1, 0, "key = value", 1,
+              "^(%w+)%s*=%s*(%w+)$", "");
+    gen_match(dir, "positions", FM_GMATCH, 0, 0, "one two", 1, "()(%a+)()",
+              "");
+    gen_match(dir, "empty-matches", FM_GMATCH, 1, 0, "baaac", 1, "a*", "");
+    gen_match(dir, "backref", FM_MATCH, 2, 0, "xaabaay", 1, "(a+)b%1", "");
+    gen_match(dir, "frontier", FM_GSUB, 3, 0, "THE (quick) fox", 1,
+              "%f[%a]%a+", "<%0>");
+    gen_match(dir, "anchored", FM_MATCH, 0, 0, "xxxxy", 1, "^(x*)$", "");
+    gen_match(dir, "optional", FM_FIND | FM_ARG, 1, -4, "color colour", 1,
+              "colou?r", "");
+    gen_match(dir, "plus-minus", FM_GSUB, 2, 0, "<a><bb><>", 1, "<(.-)>",
+              "[%1]");
+    gen_match(dir, "empty-items", FM_GMATCH, 0, 0, "cb xb xxb", 1,
+              "(x-)(a?)(y*)b", "");
+    gen_match(dir, "dollar-mid", FM_FIND, 0, 0, "a$b", 1, "a$b", "");
+    gen_match(dir, "gsub-count", FM_GSUB | FM_ARG, 1, 2, "a a a a", 1, "a",
+              "b");
+    gen_match(dir, "gsub-anchored", FM_GSUB, 0, 0, "aaa", 1, "^a", "b");
+    gen_match(dir, "gsub-table", FM_GSUB | FM_TABLE, 1, 0, "a b ab d", 1,
+              "%w+", "");
+    gen_match(dir, "gsub-function", FM_GSUB | FM_JOIN, 0, 0, "a=1, b=2", 1,
+              "(%w+)=(%w+)", "");
+    gen_match(dir, "gsub-keep", FM_GSUB | FM_KEEP, 2, 0, "a b x y", 1, "%w",
+              "");
+    gen_match(dir, "gsub-positions", FM_GSUB, 0, 0, "abc", 1, "()", "%1,");
+    gen_match(dir, "no-yield", FM_GSUB | FM_NO_YIELD, 0, 0, "(", 100, "%b()",
+              "x");
+    gen_match(dir, "z-class", FM_FIND, 1, 0, "a\001b", 1, "%z*[%c]b", "");
+    gen_write(dir, "match", "tokens", tokens, sizeof tokens);
+    /* The errors, raised when the machine reaches them. */
+    gen_match(dir, "err-set", FM_FIND, 0, 0, "abc", 1, "b[a", "");
+    gen_match(dir, "err-set-never", FM_FIND, 0, 0, "abc", 1, "x[a", "");
+    gen_match(dir, "err-escape", FM_MATCH, 0, 0, "abc", 1, "a%", "");
+    gen_match(dir, "err-capture-index", FM_MATCH, 0, 0, "abc", 1, "(a)%2", "");
+    gen_match(dir, "err-unfinished", FM_MATCH, 0, 0, "abc", 1, "(a", "");
+    gen_match(dir, "err-close", FM_MATCH, 0, 0, "abc", 1, "a)", "");
+    gen_match(dir, "err-balance-args", FM_FIND, 0, 0, "abc", 1, "%b(", "");
+    gen_match(dir, "err-frontier", FM_FIND, 0, 0, "abc", 1, "%fa", "");
+    gen_match(dir, "err-too-many", FM_MATCH, 0, 0, "a", 1,
+              "((((((((((((((((((((((((((((((((((a))))))))))))))))))))))))"
+              "))))))))",
+              "");
+    gen_match_rep(dir, "err-too-complex", FM_MATCH, 0, 0, "a", 220, "a?", 220,
+                  "");
+    gen_match_rep(dir, "depth-199", FM_MATCH, 0, 0, "a", 220, "a?", 199, "");
+    gen_match(dir, "err-replacement", FM_GSUB, 0, 0, "abc", 1, "b", "%");
+    gen_match(dir, "err-replacement-index", FM_GSUB, 0, 0, "abc", 1, "b",
+              "%2");
+    gen_match(dir, "err-replacement-value", FM_GSUB | FM_KEEP, 0, 0, "abc", 1,
+              "c", "");
+}
+
 int main(int argc, char **argv)
 {
     /* README's Homing request, and one with a SIZE above any command. */
@@ -548,5 +693,6 @@ int main(int argc, char **argv)
     gen_save(&g, dir, "seq-fault-close");
 
     gen_script(dir);
+    gen_patterns(dir);
     return 0;
 }

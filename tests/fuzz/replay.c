@@ -21,6 +21,7 @@ int fuzz_control_one(const uint8_t *data, size_t size);
 int fuzz_script_one(const uint8_t *data, size_t size);
 int fuzz_gcl_one(const uint8_t *data, size_t size);
 int fuzz_sse_one(const uint8_t *data, size_t size);
+int fuzz_match_one(const uint8_t *data, size_t size);
 
 /* Largest input replayed; libFuzzer's default -max_len is 4096. */
 #define REPLAY_MAX (1u << 20)
@@ -44,6 +45,7 @@ static int replay_file(const char *path)
     fuzz_script_one(buf, n);
     fuzz_gcl_one(buf, n);
     fuzz_sse_one(buf, n);
+    fuzz_match_one(buf, n);
     return 0;
 }
 

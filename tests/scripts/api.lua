@@ -168,6 +168,23 @@ local ops = {
   [11] = function(p)
     return grasping.release(wire.float(p, 2), wire.float(p, 6))
   end,
+  -- Integer arguments out of range: errors, not their low bits. Each
+  -- called by name (not a tail call), so that the error names it.
+  [12] = function()
+    local function try(f)
+      local ok, err = pcall(f)
+      return ok and "ok" or err:gsub("^.-: ", "")
+    end
+    local big = 2^32 + 1
+    return try(function() local r = mc.homing(big) return r end),
+      try(function() local r = mc.homing(-1) return r end),
+      try(function() local r = mc.move(50, 50, 256) return r end),
+      try(function() local r = mc.move(50, 50, big) return r end),
+      try(function() local r = cmd.register(big + 0xB0) return r end),
+      try(function() local r = finger.type(2^32) return r end),
+      try(function() local r = etob(2^32) return r end),
+      mc.homing(3)
+  end,
 }
 h[0xBD] = function(id, p)
   -- What the call returned, then the state it left at once.

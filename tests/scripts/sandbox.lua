@@ -2,7 +2,8 @@
 -- Each try runs inside the script and answers what happened, for the test
 -- to compare with what the sandbox promises (src/script/script.h): no
 -- io, os.execute, loadlib or debug, text chunks only, modules only from
--- beside the script, a memory cap, and preemption of loops. The test runs
+-- beside the script, a memory cap, and preemption of loops, in the body,
+-- in its coroutines and in the pattern functions. The test runs
 -- a copy of it in a directory of its own, with a module outside that
 -- directory and a precompiled chunk beside it.
 local wire = require "wire"
@@ -52,10 +53,15 @@ h[0xB1] = function(id, p)
   local bin_ok, bin_err = pcall(require, "binmod")
   -- linked.lua beside the script is a symbolic link to a file outside.
   local link_ok, link_err = pcall(require, "linked")
+  -- linkdir beside the script is a symbolic link to a directory outside
+  -- holding mod.lua; sub is a directory holding real.lua.
+  local dir_ok, dir_err = pcall(require, "linkdir.mod")
+  local sub_ok, sub = pcall(require, "sub.real")
   package.path = wire.string(p) .. "/?.lua"
   local ok, err = pcall(require, "outside")
   wire.reply(id, outcome(ok, err), outcome(bin_ok, bin_err, nil, true),
-             outcome(link_ok, link_err, nil, true))
+             outcome(link_ok, link_err, nil, true),
+             outcome(dir_ok, dir_err, nil, true), outcome(sub_ok, sub))
 end
 
 -- A precompiled chunk, for the test to put beside the script.
@@ -76,15 +82,25 @@ h[0xB4] = function()
   end
 end
 
--- Loops where the script cannot be preempted: a coroutine of its own, and
--- a comparison that table.sort calls from C. Each must end in an error.
+-- Loops where the script cannot be preempted, in functions Lua calls from
+-- C: a sort's comparison, a __tostring, a load reader. Each must end in an
+-- error. A coroutine of the script's own is preempted like the body: one
+-- that counts for some 30 slices ends, and says so.
 h[0xB5] = function(id)
-  local co = coroutine.create(function() while true do end end)
-  local sorted = pcall(table.sort, {3, 2, 1}, function()
+  local handled = {pcall(table.sort, {3, 2, 1}, function()
     while true do end
+  end)}
+  local shown = {pcall(tostring, setmetatable({}, {__tostring = function()
+    while true do end
+  end}))}
+  local loaded = {load(function() while true do end end)}
+  local co = coroutine.wrap(function()
+    local n = 0
+    for i = 1, 3000000 do n = n + i end
+    return n
   end)
-  wire.reply(id, outcome(coroutine.resume(co)), sorted,
-             coroutine.status(co))
+  wire.reply(id, outcome(handled[1], handled[2]), outcome(shown[1], shown[2]),
+             outcome(loaded[1], loaded[2]), co())
 end
 
 -- A finalizer: Lua would run it with no hook, where a loop could not be
@@ -103,25 +119,33 @@ h[0xB6] = function(id)
   wire.reply(id, ran, same, rawget(mt, "__gc") ~= nil)
 end
 
--- A loop around the stuck coroutine, each error caught: the script keeps
+-- A loop around a stuck __tostring, each error caught: the script keeps
 -- running stuck code, and the host must still get the processor back.
 h[0xB8] = function()
+  local t = setmetatable({}, {__tostring = function() while true do end end})
   while true do
-    pcall(coroutine.wrap(function() while true do end end))
+    pcall(tostring, t)
   end
 end
 
--- The library's C loops that no hook preempts are bounded by their
--- arguments: a backtracking pattern and a move over a vast range are
--- refused at once; ordinary patterns and a plain find of any size work.
+-- The pattern functions yield across themselves: a pattern that
+-- backtracks for millions of steps runs (preempted) and answers, and one
+-- the old pre-check refused for its worst case works; a malformed one
+-- fails as in Lua. table.move moves a slice at a time: three million
+-- elements (some hundred slices) are moved, preempted, and its argument
+-- errors are Lua's. A plain find and an anchored match of any size work.
 h[0xB9] = function(id)
-  local backtrack = pcall(string.find, ("a"):rep(100), (".-"):rep(10) .. "b")
-  local quadratic = pcall(string.gsub, ("1"):rep(100000), "%d+x", "")
+  local lazy = string.find(("a"):rep(100000), (".-"):rep(10) .. "a")
+  local _, quadratic = string.gsub(("1"):rep(2000), "%d+x", "")
   local _, key = pcall(string.match, "key = value", "^(%w+)%s*=%s*(%w+)$")
-  local move = pcall(table.move, {}, 1, 2^40, 2)
+  local far = table.move({}, 1, 3000000, 2, {7})[1]
+  local shifted = table.concat(table.move({1, 2, 3}, 1, 3, 2), ",")
+  local _, wrap = pcall(table.move, {}, 1, 2, math.maxinteger)
   local plain = string.find(("a"):rep(100000) .. "b", "b", 1, true)
   local anchored = #(string.match(("x"):rep(100000), "^(x*)$"))
-  wire.reply(id, backtrack, quadratic, key, move, plain, anchored)
+  local _, bad = pcall(string.find, "a", "[a")
+  wire.reply(id, lazy, quadratic, key, far, shifted, wrap, plain, anchored,
+             bad)
 end
 
 h[0xB7] = function(id, p)
