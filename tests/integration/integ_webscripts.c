@@ -20,6 +20,9 @@
  *   /script/stop stops it (D19 cleared, its ID E_CMD_UNKNOWN again);
  * - failure: a script that raises an error shows the error and D20 in the
  *   state (and GET /script/status); one that does not compile is 422;
+ *   an error as long as the host keeps, of control characters and a
+ *   character cut in two, is still answered by the run (422) and GET
+ *   /script/status, in valid JSON;
  * - without --script-dir every endpoint says so (409, naming the option).
  *
  * Built without libmicrohttpd (WSG_TEST_HAVE_WEB 0) it is skipped.
@@ -398,6 +401,30 @@ static void test_run(struct emu *e)
     emu_close(&c);
 }
 
+/* A script whose error is as long as the host keeps, made of what JSON
+ * escapes longest (control characters, 6 bytes each) and ending in a
+ * two-byte character the host's cut may split: the run's 422 and GET
+ * /script/status are still answered, each in valid JSON (UTF-8). */
+static void test_long_error(void)
+{
+    static const char long_lua[] =
+        "error(string.rep('\\1', 400) .. string.rep('\\195\\169', 100), 0)\n";
+
+    CHECK_EQ(req("PUT", "/scripts/long.lua", long_lua), 201);
+    CHECK_EQ(post("/script/run", "name=long.lua"), 422);
+    CHECK(http_json_valid(ans.body, ans.body_len));
+    CHECK(strstr(ans.body, "\\u0001\\u0001") != NULL);
+    CHECK_EQ(req("GET", "/script/status", NULL), 200);
+    CHECK(http_json_valid(ans.body, ans.body_len));
+    if (!http_json_valid(ans.body, ans.body_len))
+        fprintf(stderr, "status: %s\n", ans.body);
+    CHECK(strstr(ans.body, "\"failed\":true") != NULL);
+    CHECK(strstr(ans.body, "\"error\":\"\\u0001\\u0001") != NULL);
+    CHECK(strstr(ans.body, "\\u0001\xc3\xa9") != NULL);
+    CHECK(strstr(ans.body, "\"memory_max\":") != NULL);
+    CHECK_EQ(req("DELETE", "/scripts/long.lua", NULL), 200);
+}
+
 /* A daemon without --script-dir: every endpoint says what is missing. */
 static void test_no_dir(const char *exe)
 {
@@ -442,6 +469,7 @@ int main(int argc, char **argv)
     test_names();
     test_caps();
     test_run(&e);
+    test_long_error();
     CHECK_EQ(emu_stop(&e), 0);
     test_no_dir(exe);
 

@@ -141,8 +141,13 @@ enum MHD_Result wsg_web_error(struct MHD_Connection *conn, unsigned status,
 /* A field of the request's form (or its query string); NULL if absent. */
 const char *wsg_web_field(const struct wsg_web_req *req, const char *name);
 /* s as a JSON string body (no quotes) into buf; returns its length, or
- * cap when it does not fit (buf then holds a cut that is still valid). */
+ * cap when it does not fit (buf then holds a cut that is still valid:
+ * whole escapes and whole characters). Bytes that are not UTF-8 become
+ * U+FFFD, so the answer is UTF-8 whatever s holds. */
 size_t wsg_web_escape(char *buf, size_t cap, const char *s, size_t len);
+/* n, or less so that s's first bytes end with a whole UTF-8 character
+ * (not in the middle of one; bytes that are not UTF-8 count as whole). */
+size_t wsg_web_utf8_whole(const char *s, size_t n);
 /* Bring the gripper's time up to date before acting on it, and have it
  * rescheduled after (as the control channel does). */
 void wsg_web_touch(struct wsg_web *web);

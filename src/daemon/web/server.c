@@ -453,6 +453,7 @@ enum MHD_Result wsg_web_answer(struct MHD_Connection *conn, unsigned status,
 enum MHD_Result wsg_web_json(struct MHD_Connection *conn, unsigned status,
                              const char *fmt, ...)
 {
+    static const char too_long[] = "{\"error\":\"the answer does not fit\"}";
     char buf[WSG_WEB_ANSWER_MAX];
     va_list ap;
     int n;
@@ -460,41 +461,108 @@ enum MHD_Result wsg_web_json(struct MHD_Connection *conn, unsigned status,
     va_start(ap, fmt);
     n = vsnprintf(buf, sizeof buf, fmt, ap);
     va_end(ap);
+    /* Answered all the same: MHD_NO would close the connection without
+     * a word. The handlers size what they put in; this is a bug's net. */
     if (n < 0 || (size_t)n >= sizeof buf)
-        return MHD_NO;
+        return wsg_web_answer(conn, MHD_HTTP_INTERNAL_SERVER_ERROR,
+                              "application/json", too_long,
+                              sizeof too_long - 1, 1);
     return wsg_web_answer(conn, status, "application/json", buf, (size_t)n, 0);
+}
+
+/* The length of the UTF-8 character at s (n bytes left): 1..4, or 0 when
+ * s does not start one (a stray continuation byte, an overlong form, a
+ * surrogate, past U+10FFFF, or cut short). */
+static size_t utf8_len(const unsigned char *s, size_t n)
+{
+    unsigned char lo = 0x80, hi = 0xbf;
+    size_t len, i;
+
+    if (s[0] < 0x80)
+        return 1;
+    if (s[0] >= 0xc2 && s[0] <= 0xdf)
+        len = 2;
+    else if (s[0] >= 0xe0 && s[0] <= 0xef)
+        len = 3;
+    else if (s[0] >= 0xf0 && s[0] <= 0xf4)
+        len = 4;
+    else
+        return 0;
+    if (s[0] == 0xe0)
+        lo = 0xa0;
+    else if (s[0] == 0xed)
+        hi = 0x9f;
+    else if (s[0] == 0xf0)
+        lo = 0x90;
+    else if (s[0] == 0xf4)
+        hi = 0x8f;
+    if (n < len || s[1] < lo || s[1] > hi)
+        return 0;
+    for (i = 2; i < len; i++)
+        if (s[i] < 0x80 || s[i] > 0xbf)
+            return 0;
+    return len;
+}
+
+size_t wsg_web_utf8_whole(const char *s, size_t n)
+{
+    const unsigned char *u = (const unsigned char *)s;
+    size_t back, need;
+
+    /* Back over continuation bytes (three at most) to the lead byte: cut
+     * before it when its character needs more bytes than are there. */
+    for (back = 1; back <= 3 && back <= n; back++) {
+        if (u[n - back] < 0x80)
+            return n;
+        if (u[n - back] >= 0xc0) {
+            need = u[n - back] >= 0xf0 ? 4 : u[n - back] >= 0xe0 ? 3 : 2;
+            return need > back ? n - back : n;
+        }
+    }
+    return n;
 }
 
 size_t wsg_web_escape(char *buf, size_t cap, const char *s, size_t len)
 {
     static const char hex[] = "0123456789abcdef";
-    size_t used = 0, i;
+    const unsigned char *u = (const unsigned char *)s;
+    size_t used = 0, i = 0;
 
-    for (i = 0; i < len; i++) {
-        unsigned char c = (unsigned char)s[i];
+    while (i < len) {
+        unsigned char c = u[i];
+        const char *from = s + i;
         char esc[7];
-        size_t n;
+        size_t n, take;
 
         if (c == '"' || c == '\\') {
             esc[0] = '\\';
             esc[1] = (char)c;
+            from = esc;
             n = 2;
+            take = 1;
         } else if (c < 0x20 || c == 0x7f) {
             memcpy(esc, "\\u00", 4);
             esc[4] = hex[c >> 4];
             esc[5] = hex[c & 15];
+            from = esc;
             n = 6;
+            take = 1;
+        } else if ((n = utf8_len(u + i, len - i)) != 0) {
+            take = n; /* a character whole, never a part of one */
         } else {
-            esc[0] = (char)c;
-            n = 1;
+            /* Not UTF-8 (a script's bytes, a cut name): JSON must be. */
+            from = "\\ufffd";
+            n = 6;
+            take = 1;
         }
         if (used + n >= cap) {
             if (cap)
                 buf[used] = '\0';
             return cap;
         }
-        memcpy(buf + used, esc, n);
+        memcpy(buf + used, from, n);
         used += n;
+        i += take;
     }
     if (cap)
         buf[used] = '\0';
