@@ -5,7 +5,8 @@
  * - GET / is the page, and its script and style are served with their
  *   types; HEAD answers without a body; an unknown path is 404, a wrong
  *   method 405 with Allow, a POST from another site's page (Origin) 403,
- *   a body over 4 KiB 413;
+ *   a body over 4 KiB 413, chunked too (not a reset; a chunked form
+ *   within the cap is taken);
  * - GET /state.json is the control channel's state byte for byte (time
  *   paused, so the two cannot differ in time); GET /info.json has the
  *   model's stroke and every flag's name by bit;
@@ -377,6 +378,54 @@ static void test_control(struct ctl *k)
     CHECK_EQ(get("GET", "/control", NULL, NULL), 405);
 }
 
+/* A request sent as it is, with a chunked body of n bytes of 'x' in
+ * chunks of 1000 (form: the bytes are the form's, not x's): the status,
+ * or -1 (no answer, the connection was reset). */
+static int chunked(const char *path, const char *type, const char *form,
+                   size_t n)
+{
+    static char msg[16384];
+    size_t used, off, k;
+
+    used = (size_t)snprintf(msg, sizeof msg,
+                            "POST %s HTTP/1.1\r\nHost: %s\r\n"
+                            "Connection: close\r\n%s"
+                            "Transfer-Encoding: chunked\r\n\r\n",
+                            path, web, type ? type : "");
+    if (form)
+        n = strlen(form);
+    for (off = 0; off < n && used + 1100 < sizeof msg; off += k) {
+        k = n - off < 1000 ? n - off : 1000;
+        used += (size_t)snprintf(msg + used, sizeof msg - used, "%zx\r\n", k);
+        if (form)
+            memcpy(msg + used, form + off, k);
+        else
+            memset(msg + used, 'x', k);
+        used += k;
+        memcpy(msg + used, "\r\n", 2);
+        used += 2;
+    }
+    used += (size_t)snprintf(msg + used, sizeof msg - used, "0\r\n\r\n");
+    if (http_exchange(web, msg, used, &ans, EMU_REPLY_MS) < 0)
+        return -1;
+    return ans.status;
+}
+
+/* What a request carries, checked: a chunked body over the cap is 413
+ * as a Content-Length one is (not a reset). */
+static void test_bodies(struct ctl *k)
+{
+    /* Chunked: a form within the cap is taken, a body over it 413. */
+    CHECK_EQ(chunked("/control", FORM, "line=part+25", 0), 200);
+    CHECK(strstr(ctl_cmd(k, "state"), "\"part\":{\"width\":25.000"));
+    CHECK_EQ(get("POST", "/control", FORM, "line=part+none"), 200);
+    CHECK_EQ(chunked("/ack", NULL, NULL, BODY_MAX), 200);
+    CHECK_EQ(chunked("/ack", NULL, NULL, BODY_MAX + 1), 413);
+    CHECK(strstr(ans.body, "\"error\":\"body larger than 4096 bytes\"") !=
+          NULL);
+    CHECK_EQ(chunked("/control", FORM, NULL, 3 * BODY_MAX), 413);
+}
+
 /* On loopback, another site's name in Host is not answered (DNS
  * rebinding); loopback names are. */
 static void test_host(void)
@@ -471,6 +520,7 @@ int main(int argc, char **argv)
     test_many(&e, &k);
     test_log(&c);
     test_control(&k);
+    test_bodies(&k);
     test_host();
     test_load(&c);
 

@@ -12,7 +12,8 @@
  *   outside, is neither read, written, deleted nor run (403), and the file
  *   it points to is unchanged;
  * - caps: 256 KiB is taken, a Content-Length of one byte more refused
- *   (413) before the body is sent;
+ *   (413) before the body is sent; the same chunked: 256 KiB taken, a
+ *   byte more answered 413 (not a reset) and nothing written;
  * - run: a script uploaded and run from the page (POST /script/run)
  *   registers its own command ID and answers it over TCP; the state shows
  *   it running (D19, "script"); what it prints comes in the event
@@ -297,6 +298,35 @@ out:
     return status;
 }
 
+/* PUT path with the len bytes of body in chunks of 16 KiB: the status,
+ * or -1 (no answer). */
+static int put_chunked(const char *path, const char *body, size_t len)
+{
+    size_t cap = len + len / 1024 + 1024, used, off, n;
+    char *msg = malloc(cap);
+    int r;
+
+    if (!msg)
+        return -1;
+    used = (size_t)snprintf(msg, cap,
+                            "PUT %s HTTP/1.1\r\nHost: %s\r\n"
+                            "Connection: close\r\n"
+                            "Transfer-Encoding: chunked\r\n\r\n",
+                            path, web);
+    for (off = 0; off < len; off += n) {
+        n = len - off < 16384 ? len - off : 16384;
+        used += (size_t)snprintf(msg + used, cap - used, "%zx\r\n", n);
+        memcpy(msg + used, body + off, n);
+        used += n;
+        memcpy(msg + used, "\r\n", 2);
+        used += 2;
+    }
+    used += (size_t)snprintf(msg + used, cap - used, "0\r\n\r\n");
+    r = http_exchange(web, msg, used, &ans, EMU_REPLY_MS);
+    free(msg);
+    return r < 0 ? -1 : ans.status;
+}
+
 static void test_caps(void)
 {
     char *big = malloc(UPLOAD_MAX + 1);
@@ -311,6 +341,15 @@ static void test_caps(void)
     CHECK_EQ(req("DELETE", "/scripts/big.lua", NULL), 200);
     CHECK_EQ(head_only("PUT", "/scripts/big.lua", UPLOAD_MAX + 1), 413);
     snprintf(name, sizeof name, "%s/big.lua", dir);
+    CHECK(!exists(name));
+    /* The same sizes chunked (no Content-Length to tell): the cap taken,
+     * a byte more answered 413 as well, not a reset. */
+    CHECK_EQ(put_chunked("/scripts/big.lua", big, UPLOAD_MAX), 201);
+    CHECK_EQ(req("DELETE", "/scripts/big.lua", NULL), 200);
+    big[UPLOAD_MAX] = '-'; /* a byte more: its NUL no longer */
+    CHECK_EQ(put_chunked("/scripts/big.lua", big, UPLOAD_MAX + 1), 413);
+    CHECK(strstr(ans.body, "\"error\":\"body larger than 262144 bytes\"") !=
+          NULL);
     CHECK(!exists(name));
     free(big);
 }

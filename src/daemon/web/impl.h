@@ -106,6 +106,7 @@ struct wsg_web_req {
     size_t body_len;
     size_t body_cap;
     int refused;  /* answered already (a body too large) */
+    int too_big;  /* a chunked body past the cap: dropped, 413 at its end */
     int overfull; /* a field too long, or too many */
     size_t nfields;
     struct wsg_web_field fields[WSG_WEB_FIELDS_MAX];

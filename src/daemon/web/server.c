@@ -1017,10 +1017,20 @@ static enum MHD_Result on_body(struct wsg_web_req *req, const char *data,
         req->route->body_max ? req->route->body_max : WSG_WEB_BODY_MAX;
     char *p;
 
-    if (req->refused)
+    if (req->refused || req->too_big)
         return MHD_YES; /* the rest of a refused body: dropped */
-    if (req->body_len + n > max)
-        return too_large(req);
+    if (req->body_len + n > max) {
+        /* A chunked body, whose size no header told: MHD takes an answer
+         * only before a body or after all of it (one queued now is
+         * refused, and the connection reset). So the rest is read and
+         * dropped, and 413 answered at its end; the request's deadline
+         * bounds how long that may take. */
+        req->too_big = 1;
+        free(req->body);
+        req->body = NULL;
+        req->body_len = req->body_cap = 0;
+        return MHD_YES;
+    }
     if (req->body_len + n + 1 > req->body_cap) {
         size_t cap = req->body_cap ? req->body_cap * 2 : 1024;
 
@@ -1068,6 +1078,8 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn,
     }
     if (req->refused)
         return MHD_YES;
+    if (req->too_big)
+        return too_large(req);
     if (!req->body) {
         /* An empty body still reads as "". */
         req->body = calloc(1, 1);
