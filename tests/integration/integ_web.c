@@ -7,6 +7,15 @@
  *   method 405 with Allow, a POST from another site's page (Origin) 403,
  *   a body over 4 KiB 413, chunked too (not a reset; a chunked form
  *   within the cap is taken);
+ * - a form is read only as its media type: application/x-www-form-
+ *   urlencoded exactly, case aside, with parameters; ...XYZ, ...-not,
+ *   text/plain and text/plainfoo are 415 and change nothing; routes that
+ *   take no form do not decode one (40 fields to POST /stop or GET
+ *   /state.json, from=nothing to GET /script/output: no effect), one that
+ *   does refuses 40 fields (400);
+ * - a NUL or control character decoded from a form's name or value, or
+ *   the URL's path or query, is 400 (line=part+25%00 sets no part,
+ *   /state.json%00.txt is not /state.json);
  * - GET /state.json is the control channel's state byte for byte (time
  *   paused, so the two cannot differ in time); GET /info.json has the
  *   model's stroke and every flag's name by bit;
@@ -412,9 +421,14 @@ static int chunked(const char *path, const char *type, const char *form,
 }
 
 /* What a request carries, checked: a chunked body over the cap is 413
- * as a Content-Length one is (not a reset). */
+ * as a Content-Length one is (not a reset); a form is decoded only where
+ * a route takes one, and only when its type is exactly a form's; a NUL
+ * or control character anywhere in the decoded URL or form is 400. */
 static void test_bodies(struct ctl *k)
 {
+    char many[1024] = "a=1";
+    int i;
+
     /* Chunked: a form within the cap is taken, a body over it 413. */
     CHECK_EQ(chunked("/control", FORM, "line=part+25", 0), 200);
     CHECK(strstr(ctl_cmd(k, "state"), "\"part\":{\"width\":25.000"));
@@ -424,6 +438,57 @@ static void test_bodies(struct ctl *k)
     CHECK(strstr(ans.body, "\"error\":\"body larger than 4096 bytes\"") !=
           NULL);
     CHECK_EQ(chunked("/control", FORM, NULL, 3 * BODY_MAX), 413);
+
+    /* The form's media type, exactly: case aside, with parameters. */
+    CHECK_EQ(get("POST", "/control",
+                 "Content-Type: application/x-www-form-urlencodedXYZ\r\n",
+                 "line=part+25"),
+             415);
+    CHECK_EQ(get("POST", "/control", "Content-Type: text/plainfoo\r\n",
+                 "line=part+25"),
+             415);
+    CHECK_EQ(get("POST", "/control", "Content-Type: text/plain\r\n",
+                 "line=part+25"),
+             415);
+    CHECK_EQ(get("POST", "/control",
+                 "Content-Type: application/x-www-form-urlencoded-not\r\n",
+                 "line=part+25"),
+             415);
+    CHECK(strstr(ctl_cmd(k, "state"), "\"part\":null"));
+    CHECK_EQ(get("POST", "/control",
+                 "Content-Type: Application/X-WWW-Form-Urlencoded ; "
+                 "charset=UTF-8\r\n",
+                 "line=part+25"),
+             200);
+    CHECK_EQ(get("POST", "/control",
+                 "Content-Type: application/x-www-form-urlencoded;"
+                 "charset=UTF-8\r\n",
+                 "line=part+none"),
+             200);
+    CHECK(strstr(ctl_cmd(k, "state"), "\"part\":null"));
+    /* No body: no type needed (the fields may be in the query). */
+    CHECK_EQ(get("POST", "/control?line=part+none", NULL, NULL), 200);
+
+    /* Routes that take no form do not decode one: more fields than a
+     * form may have, or a field a handler would read, change nothing. */
+    for (i = 1; i < 40; i++)
+        snprintf(many + strlen(many), sizeof many - strlen(many), "&f%d=1", i);
+    CHECK_EQ(get("POST", "/stop", FORM, many), 200);
+    CHECK_EQ(get("GET", "/state.json", FORM, many), 200);
+    CHECK_EQ(get("GET", "/script/output?from=0", FORM, "from=nothing"), 200);
+    CHECK(strstr(ans.body, "\"from\":0,") != NULL);
+    /* ... where one is taken, too many fields are refused. */
+    CHECK_EQ(get("POST", "/control", FORM, many), 400);
+
+    /* A NUL or control character, decoded, in a form or the URL. */
+    CHECK_EQ(get("POST", "/control", FORM, "line=part+25%00"), 400);
+    CHECK_EQ(get("POST", "/control", FORM, "li%00ne=part+25"), 400);
+    CHECK_EQ(get("POST", "/control", FORM, "line=part+25%01"), 400);
+    CHECK_EQ(get("POST", "/control?line=part+25%00", NULL, NULL), 400);
+    CHECK(strstr(ctl_cmd(k, "state"), "\"part\":null"));
+    CHECK_EQ(get("GET", "/state.json%00.txt", NULL, NULL), 400);
+    CHECK_EQ(get("GET", "/state.json?x=%1f", NULL, NULL), 400);
+    CHECK_EQ(get("GET", "/state.json?x=%20", NULL, NULL), 200);
 }
 
 /* On loopback, another site's name in Host is not answered (DNS

@@ -11,6 +11,10 @@
  *   the directory; a symbolic link planted in the directory, pointing
  *   outside, is neither read, written, deleted nor run (403), and the file
  *   it points to is unchanged;
+ * - names with a NUL or a control character, percent-encoded in the
+ *   path, the query or the form (ping.lua%00.txt, ping.lua%0a): 400, and
+ *   the name they would be cut to (ping.lua) is neither written, deleted
+ *   nor run;
  * - caps: 256 KiB is taken, a Content-Length of one byte more refused
  *   (413) before the body is sent; the same chunked: 256 KiB taken, a
  *   byte more answered 413 (not a reset) and nothing written;
@@ -192,6 +196,11 @@ static void test_names(void)
         "/scripts/"
         "a123456789012345678901234567890123456789012345678901234567890.lua",
     };
+    static const char *const nul[] = {
+        "/scripts/ping.lua%00.txt", "/scripts/ping.lua%00",
+        "/scripts/ping.lua%0a",     "/scripts/ping.lua%7F",
+        "/scripts/ping.lua?x=%00",
+    };
     char path[512], link[512], parent_x[512];
     size_t i;
     FILE *f;
@@ -217,6 +226,23 @@ static void test_names(void)
                  ".lua",
                  NULL),
              200);
+    /* A NUL or a control character, percent-encoded: refused whole, not
+     * cut at the NUL to a name that exists (ping.lua). */
+    for (i = 0; i < sizeof nul / sizeof nul[0]; i++) {
+        CHECK_EQ(req("PUT", nul[i], "print('cut')\n"), 400);
+        if (ans.status != 400)
+            fprintf(stderr, "PUT %s: %d %s\n", nul[i], ans.status, ans.body);
+        CHECK_EQ(req("GET", nul[i], NULL), 400);
+        CHECK_EQ(req("DELETE", nul[i], NULL), 400);
+    }
+    CHECK_EQ(req("GET", "/scripts/ping.lua", NULL), 200);
+    CHECK(strcmp(ans.body, ping_lua) == 0);
+    CHECK_EQ(post("/script/run", "name=ping.lua%00.txt"), 400);
+    CHECK_EQ(post("/script/run", "na%00me=ping.lua"), 400);
+    CHECK_EQ(post("/script/run?name=ping.lua%00.txt", ""), 400);
+    CHECK_EQ(post("/script/run", "name=ping.lua%0A"), 400);
+    CHECK_EQ(req("GET", "/script/status", NULL), 200);
+    CHECK(strstr(ans.body, "\"running\":false") != NULL);
     snprintf(parent_x, sizeof parent_x, "%s/../x.lua", dir);
     CHECK(!exists(parent_x));
     CHECK(!exists("x.lua"));

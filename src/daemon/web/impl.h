@@ -105,9 +105,11 @@ struct wsg_web_req {
     char *body;
     size_t body_len;
     size_t body_cap;
-    int refused;  /* answered already (a body too large) */
-    int too_big;  /* a chunked body past the cap: dropped, 413 at its end */
-    int overfull; /* a field too long, or too many */
+    int refused; /* answered already (a body too large) */
+    int too_big; /* a chunked body past the cap: dropped, 413 at its end */
+    int bad_url; /* its URL decodes to a control character: 400 */
+    size_t body_seen; /* bytes of body received, kept or not */
+    int overfull;     /* a field too long, or too many */
     size_t nfields;
     struct wsg_web_field fields[WSG_WEB_FIELDS_MAX];
 };
@@ -119,7 +121,12 @@ typedef enum MHD_Result (*wsg_web_serve_fn)(struct wsg_web *web,
 struct wsg_web_route {
     const char *path; /* the URL; ending in '/': every URL under it */
     unsigned methods; /* enum wsg_web_method bits */
-    size_t body_max;  /* the largest body it takes; 0: the default */
+    /* The methods whose body is a form, decoded into the fields; those
+     * whose body is kept as it is (an upload). Any other body is read
+     * (up to the cap) and dropped, never decoded. */
+    unsigned form;
+    unsigned raw;
+    size_t body_max; /* the largest body it takes; 0: the default */
     wsg_web_serve_fn serve;
 };
 
@@ -153,6 +160,19 @@ size_t wsg_web_utf8_whole(const char *s, size_t n);
  * rescheduled after (as the control channel does). */
 void wsg_web_touch(struct wsg_web *web);
 void wsg_web_done(struct wsg_web *web);
+
+/* ---- what a request carries (request.c) ---- */
+
+/* 1 when the Content-Type value is the media type type: the same name
+ * (case aside), then nothing or its parameters (";charset=UTF-8"). */
+int wsg_web_media_is(const char *value, const char *type);
+/* 1 when the URL (path and query, as sent: before percent-decoding)
+ * holds a NUL or a control character, raw or percent-encoded. */
+int wsg_web_url_bad(const char *uri);
+/* req's body, a url-encoded form, into req's fields: 0; -E2BIG for too
+ * many fields or one too long, -EILSEQ for a NUL or control character in
+ * a name or a value. */
+int wsg_web_form_decode(struct wsg_web_req *req);
 
 /* ---- files (files.c) ---- */
 

@@ -803,7 +803,9 @@ static enum MHD_Result serve_asset(struct wsg_web *web,
 }
 
 /* Every URL the server answers; the first match wins, and what no other
- * entry names is one of the page's files (the last entry). */
+ * entry names is one of the page's files (the last entry). Only what a
+ * route says it takes of a body is kept: a form where it reads one, an
+ * upload's bytes; any other body is dropped unread by the handlers. */
 static const struct wsg_web_route routes[] = {
     {.path = "/state.json", .methods = WSG_WEB_GET, .serve = serve_state},
     {.path = "/info.json", .methods = WSG_WEB_GET, .serve = serve_info},
@@ -812,28 +814,35 @@ static const struct wsg_web_route routes[] = {
     {.path = "/ack", .methods = WSG_WEB_POST, .serve = serve_ack},
     {.path = "/motion.json",
      .methods = WSG_WEB_POST,
+     .form = WSG_WEB_POST,
      .serve = wsg_web_serve_motion_form},
     {.path = "/graspconf.json",
      .methods = WSG_WEB_POST,
+     .form = WSG_WEB_POST,
      .serve = wsg_web_serve_graspconf},
     {.path = "/motion",
      .methods = WSG_WEB_POST,
+     .form = WSG_WEB_POST,
      .serve = wsg_web_serve_motion},
     {.path = "/settings.json",
      .methods = WSG_WEB_GET | WSG_WEB_POST,
+     .form = WSG_WEB_POST,
      .serve = wsg_web_serve_settings},
     {.path = "/scripts.json",
      .methods = WSG_WEB_GET,
      .serve = wsg_web_serve_scripts},
     {.path = "/scripts/",
      .methods = WSG_WEB_GET | WSG_WEB_PUT | WSG_WEB_DELETE,
+     .raw = WSG_WEB_PUT,
      .body_max = WSG_WEB_UPLOAD_MAX,
      .serve = wsg_web_serve_script_file},
     {.path = "/script/",
      .methods = WSG_WEB_GET | WSG_WEB_POST,
+     .form = WSG_WEB_POST,
      .serve = wsg_web_serve_script_run},
     {.path = "/control",
      .methods = WSG_WEB_POST,
+     .form = WSG_WEB_POST,
      .serve = wsg_web_serve_control},
     {.path = "/", .methods = WSG_WEB_GET, .serve = serve_asset},
 };
@@ -913,63 +922,6 @@ static int foreign_host(const struct wsg_web *web, struct MHD_Connection *conn)
     return 1;
 }
 
-/* A form's fields, as MHD's post processor decodes them. */
-static enum MHD_Result on_field(void *cls, enum MHD_ValueKind kind,
-                                const char *key, const char *filename,
-                                const char *type, const char *encoding,
-                                const char *data, uint64_t off, size_t size)
-{
-    struct wsg_web_req *req = cls;
-    struct wsg_web_field *f;
-
-    (void)kind;
-    (void)filename;
-    (void)type;
-    (void)encoding;
-    /* A value may come in pieces: the next piece of the last field. */
-    if (off > 0 && req->nfields &&
-        strcmp(req->fields[req->nfields - 1].name, key) == 0)
-        f = &req->fields[req->nfields - 1];
-    else if (req->nfields < WSG_WEB_FIELDS_MAX &&
-             strlen(key) < WSG_WEB_NAME_MAX)
-        f = &req->fields[req->nfields++];
-    else {
-        req->overfull = 1;
-        return MHD_YES;
-    }
-    if (off == 0)
-        strcpy(f->name, key);
-    if (off + size >= WSG_WEB_VALUE_MAX) {
-        req->overfull = 1;
-        return MHD_YES;
-    }
-    memcpy(f->value + off, data, size);
-    f->value[off + size] = '\0';
-    return MHD_YES;
-}
-
-/* Decode a form body into req's fields; other bodies stay as they are. */
-static void parse_form(struct wsg_web_req *req)
-{
-    struct MHD_PostProcessor *pp;
-    const char *type;
-
-    type = MHD_lookup_connection_value(req->conn, MHD_HEADER_KIND,
-                                       MHD_HTTP_HEADER_CONTENT_TYPE);
-    if (!type ||
-        strncasecmp(type, MHD_HTTP_POST_ENCODING_FORM_URLENCODED,
-                    strlen(MHD_HTTP_POST_ENCODING_FORM_URLENCODED)) != 0)
-        return;
-    pp = MHD_create_post_processor(req->conn, 1024, on_field, req);
-    if (!pp) {
-        req->overfull = 1;
-        return;
-    }
-    if (req->body_len)
-        MHD_post_process(pp, req->body, req->body_len);
-    MHD_destroy_post_processor(pp);
-}
-
 static enum MHD_Result too_large(struct wsg_web_req *req)
 {
     char msg[64];
@@ -1001,6 +953,11 @@ static enum MHD_Result on_headers(struct wsg_web *web, struct wsg_web_req *req)
         req->refused = 1;
         return wsg_web_error(req->conn, MHD_HTTP_FORBIDDEN, "foreign origin");
     }
+    if (req->bad_url) {
+        req->refused = 1;
+        return wsg_web_error(req->conn, MHD_HTTP_BAD_REQUEST,
+                             "a NUL or control character in the URL");
+    }
     max = req->route->body_max ? req->route->body_max : WSG_WEB_BODY_MAX;
     clen = MHD_lookup_connection_value(req->conn, MHD_HEADER_KIND,
                                        MHD_HTTP_HEADER_CONTENT_LENGTH);
@@ -1019,7 +976,7 @@ static enum MHD_Result on_body(struct wsg_web_req *req, const char *data,
 
     if (req->refused || req->too_big)
         return MHD_YES; /* the rest of a refused body: dropped */
-    if (req->body_len + n > max) {
+    if (req->body_seen + n > max) {
         /* A chunked body, whose size no header told: MHD takes an answer
          * only before a body or after all of it (one queued now is
          * refused, and the connection reset). So the rest is read and
@@ -1031,6 +988,10 @@ static enum MHD_Result on_body(struct wsg_web_req *req, const char *data,
         req->body_len = req->body_cap = 0;
         return MHD_YES;
     }
+    req->body_seen += n;
+    /* A body the route does not take: not kept, never decoded. */
+    if (!((req->route->form | req->route->raw) & req->method))
+        return MHD_YES;
     if (req->body_len + n + 1 > req->body_cap) {
         size_t cap = req->body_cap ? req->body_cap * 2 : 1024;
 
@@ -1048,6 +1009,50 @@ static enum MHD_Result on_body(struct wsg_web_req *req, const char *data,
     return MHD_YES;
 }
 
+/* The body of a route that takes a form: decoded when it is one (its
+ * media type, exactly), refused when it is something else. NULL to go
+ * on to the handler, else why it is refused, with its status. */
+static const char *take_form(struct wsg_web_req *req, unsigned *status)
+{
+    const char *type;
+    int r;
+
+    /* No body: the fields, if any, are in the query. */
+    if (!(req->route->form & req->method) || req->body_len == 0)
+        return NULL;
+    type = MHD_lookup_connection_value(req->conn, MHD_HEADER_KIND,
+                                       MHD_HTTP_HEADER_CONTENT_TYPE);
+    *status = MHD_HTTP_BAD_REQUEST;
+    if (!wsg_web_media_is(type, MHD_HTTP_POST_ENCODING_FORM_URLENCODED)) {
+        *status = MHD_HTTP_UNSUPPORTED_MEDIA_TYPE;
+        return "the body must be a form: Content-Type: "
+               "application/x-www-form-urlencoded";
+    }
+    r = wsg_web_form_decode(req);
+    if (r == -EILSEQ)
+        return "a NUL or control character in a form field";
+    if (r < 0) {
+        req->overfull = 1;
+        return "too many form fields, or one too long";
+    }
+    return NULL;
+}
+
+/* MHD has read a request's first line: the request starts here, its URL
+ * still as sent, before MHD decodes it (a "%00" cuts the decoded one
+ * short, unseen). What it returns is the request's *req_cls. */
+static void *on_uri(void *cls, const char *uri, struct MHD_Connection *conn)
+{
+    struct wsg_web_req *req = calloc(1, sizeof *req);
+
+    (void)cls;
+    if (!req)
+        return NULL; /* on_request closes the connection */
+    req->conn = conn;
+    req->bad_url = wsg_web_url_bad(uri ? uri : "");
+    return req;
+}
+
 /* MHD calls this once with the headers, then with each piece of the body,
  * then once more with none: the request is answered then. */
 static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn,
@@ -1057,14 +1062,14 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn,
 {
     struct wsg_web *web = cls;
     struct wsg_web_req *req = *req_cls;
+    const char *why;
+    unsigned status;
     size_t n;
 
     (void)version;
-    if (!req) {
-        req = calloc(1, sizeof *req);
-        if (!req)
-            return MHD_NO;
-        *req_cls = req;
+    if (!req)
+        return MHD_NO; /* no memory for it (on_uri) */
+    if (!req->route) {
         req->conn = conn;
         req->url = url;
         req->method = method_of(method);
@@ -1086,10 +1091,9 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn,
         if (!req->body)
             return MHD_NO;
     }
-    parse_form(req);
-    if (req->overfull)
-        return wsg_web_error(conn, MHD_HTTP_BAD_REQUEST,
-                             "too many form fields, or one too long");
+    why = take_form(req, &status);
+    if (why)
+        return wsg_web_error(conn, status, why);
     return req->route->serve(web, req);
 }
 
@@ -1220,10 +1224,10 @@ int wsg_web_open(struct wsg_web **out, struct wsg_daemon *d, char *err,
     web->mhd = MHD_start_daemon(
         MHD_USE_EPOLL | MHD_ALLOW_SUSPEND_RESUME | MHD_USE_ERROR_LOG, 0, NULL,
         NULL, on_request, web, MHD_OPTION_EXTERNAL_LOGGER, on_log, NULL,
-        MHD_OPTION_LISTEN_SOCKET, fd, MHD_OPTION_CONNECTION_LIMIT,
-        (unsigned)WSG_WEB_CLIENTS_MAX, MHD_OPTION_CONNECTION_TIMEOUT,
-        (unsigned)WEB_IDLE_TIMEOUT_S, MHD_OPTION_NOTIFY_COMPLETED,
-        on_completed, NULL, MHD_OPTION_END);
+        MHD_OPTION_LISTEN_SOCKET, fd, MHD_OPTION_URI_LOG_CALLBACK, on_uri,
+        NULL, MHD_OPTION_CONNECTION_LIMIT, (unsigned)WSG_WEB_CLIENTS_MAX,
+        MHD_OPTION_CONNECTION_TIMEOUT, (unsigned)WEB_IDLE_TIMEOUT_S,
+        MHD_OPTION_NOTIFY_COMPLETED, on_completed, NULL, MHD_OPTION_END);
     if (!web->mhd) {
         r = -EIO;
         snprintf(err, errlen,
