@@ -34,6 +34,7 @@
 #define WSG_WEB_LOG_EVENT_MAX (16u * 1024u)
 
 struct web_sub;
+struct web_conn;
 
 struct wsg_web {
     struct wsg_daemon *d;
@@ -50,11 +51,14 @@ struct wsg_web {
     char local[WSG_ADDR_LEN];
     /* CLOCK_MONOTONIC deadlines, 0 for none: MHD wants to run by mhd_due
      * (a connection's timeout, or work it left for the next round), a
-     * change waits to be pushed at push_due; the timer is armed for the
-     * earlier one (armed). */
+     * change waits to be pushed at push_due, a request's deadline passes
+     * at conn_due; the timer is armed for the earliest (armed). */
     uint64_t mhd_due;
     uint64_t push_due;
+    uint64_t conn_due; /* the first request's deadline (server.c) */
     uint64_t armed;
+    /* The connections, each with the time its request started. */
+    struct web_conn *conns;
     /* The event stream: its subscribers, and the newest event. */
     struct web_sub *subs;
     size_t nsubs;

@@ -38,12 +38,14 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <microhttpd.h>
+#include <netinet/in.h>
 #include <stdarg.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/epoll.h>
+#include <sys/socket.h>
 #include <sys/timerfd.h>
 #include <time.h>
 #include <unistd.h>
@@ -55,9 +57,11 @@
 
 #define NS_PER_S  1000000000ull
 #define NS_PER_MS 1000000ull
-/* An HTTP connection that sends nothing is closed after this; a browser
- * keeps one open after loading the page. A suspended event stream does
- * not time out (MHD stops its clock while suspended). */
+/* A connection on which nothing moves for this long is closed (MHD's
+ * timeout): one whose client does not read its answer. One that waits
+ * for a request is closed sooner, at the request's deadline
+ * (WSG_WEB_REQUEST_S). A suspended event stream does not time out (MHD
+ * stops its clock while suspended). */
 #define WEB_IDLE_TIMEOUT_S 60u
 /* MHD_run rounds in a row while resumes come in during them (a new
  * stream's first event): one more does it, the rest only bound the loop;
@@ -75,7 +79,8 @@
 struct web_sub {
     struct wsg_web *web;
     struct MHD_Connection *conn;
-    struct wsg_watch hup; /* its socket while suspended; fd -1: not */
+    struct sockaddr_storage peer; /* its client's address */
+    struct wsg_watch hup;         /* its socket while suspended; fd -1: not */
     int suspended;
     int gone;         /* hung up: end the stream */
     uint64_t seq;     /* the state event it has (or is sending) */
@@ -83,6 +88,15 @@ struct web_sub {
     size_t len, off;
     char buf[WSG_WEB_LOG_EVENT_MAX];
     struct web_sub *prev, *next;
+};
+
+/* A connection, from MHD's notice of it to its close (its socket
+ * context): when the request it is receiving started, for the deadline
+ * of its head and body (WSG_WEB_REQUEST_S). */
+struct web_conn {
+    struct MHD_Connection *conn;
+    uint64_t since; /* 0: no request is being received (one is answered) */
+    struct web_conn *prev, *next;
 };
 
 static uint64_t mono_ns(void)
@@ -104,6 +118,8 @@ static void web_arm(struct wsg_web *web)
 
     if (web->push_due && (!due || web->push_due < due))
         due = web->push_due;
+    if (web->conn_due && (!due || web->conn_due < due))
+        due = web->conn_due;
     if (due == web->armed)
         return;
     memset(&its, 0, sizeof its);
@@ -157,6 +173,8 @@ static void on_mhd(struct wsg_watch *w, uint32_t events)
     web_run(w->ctx);
 }
 
+static void conns_expire(struct wsg_web *web, uint64_t now);
+
 static void on_timer(struct wsg_watch *w, uint32_t events)
 {
     struct wsg_web *web = w->ctx;
@@ -169,6 +187,8 @@ static void on_timer(struct wsg_watch *w, uint32_t events)
     /* The hook after this batch pushes what changed meanwhile. */
     if (web->push_due && web->push_due <= now)
         web->push_due = 0;
+    if (web->conn_due && web->conn_due <= now)
+        conns_expire(web, now);
     if (web->mhd_due && web->mhd_due <= now)
         web_run(web);
     else
@@ -415,6 +435,118 @@ static void web_check(struct wsg_web *web)
 static void web_after(void *ctx)
 {
     web_check(ctx);
+}
+
+/* ---- connections and the deadline of a request ---- */
+
+/* MHD's idle timeout (WEB_IDLE_TIMEOUT_S) is not enough: every byte
+ * restarts it, so a client that sends a byte of its request's head now
+ * and then (slowloris) holds its slot for ever. So each connection has
+ * a clock, started when it opens and again when an answer on it is
+ * done; while it runs, the request's head and body must come within
+ * WSG_WEB_REQUEST_S, else its socket is shut down and MHD closes it. The
+ * clock stops once the request is answered: an answer being sent, such
+ * as an event stream that is idle by design, is not cut. */
+
+#define WEB_REQUEST_NS ((uint64_t)WSG_WEB_REQUEST_S * NS_PER_S)
+
+static struct web_conn *conn_of(struct MHD_Connection *conn)
+{
+    const union MHD_ConnectionInfo *ci =
+        MHD_get_connection_info(conn, MHD_CONNECTION_INFO_SOCKET_CONTEXT);
+
+    return ci ? ci->socket_context : NULL;
+}
+
+/* Shut the connection's socket down: MHD sees its end at its next run
+ * and closes it as any connection its client closed. */
+static void conn_cut(struct MHD_Connection *conn)
+{
+    const union MHD_ConnectionInfo *ci =
+        MHD_get_connection_info(conn, MHD_CONNECTION_INFO_CONNECTION_FD);
+
+    if (ci)
+        shutdown(ci->connect_fd, SHUT_RDWR);
+}
+
+/* The earliest deadline of the requests being received, anew: after a
+ * clock stopped, so that no timer is left for a request that is gone. */
+static void conns_due(struct wsg_web *web)
+{
+    const struct web_conn *c;
+    uint64_t due = 0;
+
+    for (c = web->conns; c; c = c->next)
+        if (c->since && (!due || c->since + WEB_REQUEST_NS < due))
+            due = c->since + WEB_REQUEST_NS;
+    web->conn_due = due;
+}
+
+/* Start (now) or stop (0) the clock of conn's request. Called from
+ * MHD's callbacks, inside MHD_run: web_run arms the timer after it. */
+static void conn_clock(struct wsg_web *web, struct MHD_Connection *conn,
+                       uint64_t now)
+{
+    struct web_conn *c = conn_of(conn);
+
+    if (!c || c->since == now)
+        return;
+    c->since = now;
+    if (!now)
+        conns_due(web);
+    else if (!web->conn_due || now + WEB_REQUEST_NS < web->conn_due)
+        web->conn_due = now + WEB_REQUEST_NS;
+}
+
+/* The timer: cut the connections whose request is late. */
+static void conns_expire(struct wsg_web *web, uint64_t now)
+{
+    struct web_conn *c;
+
+    for (c = web->conns; c; c = c->next) {
+        if (!c->since || now - c->since < WEB_REQUEST_NS)
+            continue;
+        conn_cut(c->conn);
+        c->since = 0;
+        web->mhd_due = now; /* MHD closes it at once */
+    }
+    conns_due(web);
+}
+
+static void on_connection(void *cls, struct MHD_Connection *conn,
+                          void **socket_context,
+                          enum MHD_ConnectionNotificationCode code)
+{
+    struct wsg_web *web = cls;
+    struct web_conn *c = *socket_context;
+
+    if (code == MHD_CONNECTION_NOTIFY_STARTED) {
+        c = calloc(1, sizeof *c);
+        if (!c) {
+            /* Without a clock it would have no deadline: refused. */
+            conn_cut(conn);
+            return;
+        }
+        c->conn = conn;
+        c->next = web->conns;
+        if (web->conns)
+            web->conns->prev = c;
+        web->conns = c;
+        *socket_context = c;
+        conn_clock(web, conn, mono_ns());
+        return;
+    }
+    if (!c)
+        return;
+    if (c->prev)
+        c->prev->next = c->next;
+    else
+        web->conns = c->next;
+    if (c->next)
+        c->next->prev = c->prev;
+    free(c);
+    *socket_context = NULL;
+    conns_due(web);
 }
 
 /* ---- answers ---- */
@@ -691,20 +823,95 @@ static enum MHD_Result serve_info(struct wsg_web *web, struct wsg_web_req *req)
                           used + 2, 0);
 }
 
+/* Whether a and b are the same address (the port aside). */
+static int same_peer(const struct sockaddr_storage *a,
+                     const struct sockaddr_storage *b)
+{
+    struct sockaddr_in a4, b4;
+    struct sockaddr_in6 a6, b6;
+
+    if (a->ss_family != b->ss_family)
+        return 0;
+    if (a->ss_family == AF_INET) {
+        memcpy(&a4, a, sizeof a4);
+        memcpy(&b4, b, sizeof b4);
+        return a4.sin_addr.s_addr == b4.sin_addr.s_addr;
+    }
+    if (a->ss_family == AF_INET6) {
+        memcpy(&a6, a, sizeof a6);
+        memcpy(&b6, b, sizeof b6);
+        return memcmp(&a6.sin6_addr, &b6.sin6_addr, sizeof a6.sin6_addr) == 0;
+    }
+    return 0;
+}
+
+/* A new stream beyond the caps: 503, with when to try again. The page
+ * (app.js) does: a browser's EventSource gives up on a 503. */
+static enum MHD_Result refuse_stream(struct MHD_Connection *conn,
+                                     const char *why)
+{
+    char body[WSG_WEB_ANSWER_MAX], retry[16];
+    struct MHD_Response *r;
+    enum MHD_Result ret;
+    int n;
+
+    n = snprintf(body, sizeof body, "{\"error\":\"%s\"}", why);
+    snprintf(retry, sizeof retry, "%u", WSG_WEB_RETRY_AFTER_S);
+    r = MHD_create_response_from_buffer((size_t)n, body,
+                                        MHD_RESPMEM_MUST_COPY);
+    if (!r)
+        return MHD_NO;
+    if (MHD_add_response_header(r, MHD_HTTP_HEADER_CONTENT_TYPE,
+                                "application/json") != MHD_YES ||
+        MHD_add_response_header(r, MHD_HTTP_HEADER_CACHE_CONTROL,
+                                "no-store") != MHD_YES ||
+        MHD_add_response_header(r, MHD_HTTP_HEADER_RETRY_AFTER, retry) !=
+            MHD_YES) {
+        MHD_destroy_response(r);
+        return MHD_NO;
+    }
+    ret = MHD_queue_response(conn, MHD_HTTP_SERVICE_UNAVAILABLE, r);
+    MHD_destroy_response(r);
+    return ret;
+}
+
 static enum MHD_Result serve_events(struct wsg_web *web,
                                     struct wsg_web_req *req)
 {
     struct MHD_Connection *conn = req->conn;
+    const union MHD_ConnectionInfo *ci;
+    struct sockaddr_storage peer;
+    const struct web_sub *other;
     const char *last;
     struct MHD_Response *r;
     struct web_sub *sub;
     enum MHD_Result ret;
+    size_t mine = 0;
 
+    /* Each stream holds a connection while its page is open: a few
+     * clients must not take them all (a peer), nor all the memory. */
+    memset(&peer, 0, sizeof peer);
+    ci = MHD_get_connection_info(conn, MHD_CONNECTION_INFO_CLIENT_ADDRESS);
+    if (ci && ci->client_addr)
+        memcpy(&peer, ci->client_addr,
+               ci->client_addr->sa_family == AF_INET6
+                   ? sizeof(struct sockaddr_in6)
+                   : sizeof(struct sockaddr_in));
+    for (other = web->subs; other; other = other->next)
+        mine += same_peer(&other->peer, &peer);
+    if (web->nsubs >= WSG_WEB_STREAMS_MAX)
+        return refuse_stream(conn, "too many event streams open: try again "
+                                   "later");
+    if (mine >= WSG_WEB_PEER_STREAMS_MAX)
+        return refuse_stream(conn, "too many event streams open from this "
+                                   "address: close a page, or try again "
+                                   "later");
     sub = calloc(1, sizeof *sub);
     if (!sub)
         return MHD_NO;
     sub->web = web;
     sub->conn = conn;
+    sub->peer = peer;
     sub->hup.fd = -1;
     r = MHD_create_response_from_callback(
         MHD_SIZE_UNKNOWN, WSG_WEB_LOG_EVENT_MAX, sub_read, sub, sub_free);
@@ -1062,6 +1269,7 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn,
 {
     struct wsg_web *web = cls;
     struct wsg_web_req *req = *req_cls;
+    enum MHD_Result ret;
     const char *why;
     unsigned status;
     size_t n;
@@ -1074,7 +1282,10 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn,
         req->url = url;
         req->method = method_of(method);
         req->route = find_route(url, &req->tail);
-        return on_headers(web, req);
+        ret = on_headers(web, req);
+        if (req->refused)
+            conn_clock(web, conn, 0); /* answered */
+        return ret;
     }
     if (*upload_size) {
         n = *upload_size;
@@ -1083,6 +1294,8 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn,
     }
     if (req->refused)
         return MHD_YES;
+    /* All of it is here: answered from now on, no longer received. */
+    conn_clock(web, conn, 0);
     if (req->too_big)
         return too_large(req);
     if (!req->body) {
@@ -1102,9 +1315,9 @@ static void on_completed(void *cls, struct MHD_Connection *conn,
 {
     struct wsg_web_req *req = *req_cls;
 
-    (void)cls;
-    (void)conn;
     (void)why;
+    /* Its answer is sent: the next request's clock starts. */
+    conn_clock(cls, conn, mono_ns());
     if (req)
         free(req->body);
     free(req);
@@ -1162,6 +1375,14 @@ void wsg_web_close(struct wsg_web *web)
             web->in_run = 0;
         }
         MHD_stop_daemon(web->mhd);
+    }
+    /* MHD told of each connection's close as it stopped; were one left,
+     * its clock goes with the server. */
+    while (web->conns) {
+        struct web_conn *c = web->conns;
+
+        web->conns = c->next;
+        free(c);
     }
     if (web->mhd_watch.fd >= 0)
         wsg_reactor_del(web->reactor, &web->mhd_watch);
@@ -1227,7 +1448,10 @@ int wsg_web_open(struct wsg_web **out, struct wsg_daemon *d, char *err,
         MHD_OPTION_LISTEN_SOCKET, fd, MHD_OPTION_URI_LOG_CALLBACK, on_uri,
         NULL, MHD_OPTION_CONNECTION_LIMIT, (unsigned)WSG_WEB_CLIENTS_MAX,
         MHD_OPTION_CONNECTION_TIMEOUT, (unsigned)WEB_IDLE_TIMEOUT_S,
-        MHD_OPTION_NOTIFY_COMPLETED, on_completed, NULL, MHD_OPTION_END);
+        MHD_OPTION_NOTIFY_COMPLETED, on_completed, web,
+        MHD_OPTION_NOTIFY_CONNECTION, on_connection, web,
+        MHD_OPTION_PER_IP_CONNECTION_LIMIT, (unsigned)WSG_WEB_PEER_CLIENTS_MAX,
+        MHD_OPTION_END);
     if (!web->mhd) {
         r = -EIO;
         snprintf(err, errlen,
