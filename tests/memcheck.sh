@@ -39,6 +39,7 @@ if [ $# = 0 ]; then
         integ_udp integ_pty integ_control integ_settings integ_log \
         integ_latency integ_together integ_wsgctl integ_fleet integ_web \
         integ_webforms integ_webscripts integ_webevents integ_webhost \
+        integ_webhostile \
         integ_script:api integ_script:ifaces integ_script:speed \
         integ_script:lifecycle integ_script:sandbox integ_script:lockstep \
         integ_script:startup \

@@ -326,20 +326,32 @@ window.wsg = (function () {
     })
     .catch(() => {});
 
-  const events = new EventSource('/events');
-  events.addEventListener('state', (ev) => show(JSON.parse(ev.data)));
-  events.addEventListener('log', (ev) => {
-    const lines = ev.data.split('\n');
-    addLog(lines);
-    wsg.emit('log', lines);
-  });
-  events.addEventListener('open', () => {
-    $('link').textContent = 'live';
-    $('link').className = 'link up';
-  });
-  events.addEventListener('error', () => {
-    /* The browser reconnects by itself. */
-    $('link').textContent = 'disconnected, reconnecting…';
-    $('link').className = 'link down';
-  });
+  /* The browser reconnects a stream that broke by itself, but gives up
+   * on one the server refused: it takes so many at once (503, with when
+   * to try again; docs/web.md). Then the page opens a new one later. */
+  const RETRY_MS = 10000;
+  function connect() {
+    const events = new EventSource('/events');
+    events.addEventListener('state', (ev) => show(JSON.parse(ev.data)));
+    events.addEventListener('log', (ev) => {
+      const lines = ev.data.split('\n');
+      addLog(lines);
+      wsg.emit('log', lines);
+    });
+    events.addEventListener('open', () => {
+      $('link').textContent = 'live';
+      $('link').className = 'link up';
+    });
+    events.addEventListener('error', () => {
+      $('link').className = 'link down';
+      if (events.readyState !== EventSource.CLOSED) {
+        $('link').textContent = 'disconnected, reconnecting…';
+        return;
+      }
+      $('link').textContent = 'no live view (the server is busy), ' +
+        'trying again…';
+      setTimeout(connect, RETRY_MS);
+    });
+  }
+  connect();
 })();

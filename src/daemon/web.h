@@ -23,6 +23,22 @@
 /* Connections served at once (the page, its event stream, requests);
  * a further one is refused by the HTTP server. */
 #define WSG_WEB_CLIENTS_MAX 256u
+/* Connections from one address at once: one client cannot take every
+ * slot. A further one is closed at once, without an answer. */
+#define WSG_WEB_PEER_CLIENTS_MAX 64u
+/* Event streams (GET /events) at once, in all and from one address: a
+ * stream holds its connection for as long as its page is open. A further
+ * one is refused, 503 with a Retry-After of WSG_WEB_RETRY_AFTER_S. */
+#define WSG_WEB_STREAMS_MAX      64u
+#define WSG_WEB_PEER_STREAMS_MAX 16u
+#define WSG_WEB_RETRY_AFTER_S    10u
+/* A request's head and body must have come within this many seconds of
+ * its connection's opening, or of the previous answer on it; else the
+ * connection is closed. A client sending a byte now and then (slowloris)
+ * cannot hold a slot for longer; nor can one that keeps a connection
+ * open and idle. An answer being sent (an event stream) has no such
+ * limit. */
+#define WSG_WEB_REQUEST_S 10u
 /* The shortest time between two state events: the page is redrawn at up
  * to 20 Hz while something changes. */
 #define WSG_WEB_PUSH_MIN_NS 50000000ull

@@ -8,6 +8,7 @@
 #include "emu_http.h"
 
 #include <arpa/inet.h>
+#include <ctype.h>
 #include <errno.h>
 #include <netinet/in.h>
 #include <poll.h>
@@ -20,9 +21,18 @@
 
 #include "emu.h"
 
-static int http_connect(const char *addr)
+/* The source address of the connections made from now on ("" or NULL:
+ * the system's choice). */
+static char source[INET_ADDRSTRLEN];
+
+void http_source(const char *ip)
 {
-    struct sockaddr_in sa;
+    snprintf(source, sizeof source, "%s", ip ? ip : "");
+}
+
+int http_open(const char *addr)
+{
+    struct sockaddr_in sa, from;
     int fd;
 
     if (emu_ipv4_addr(addr, &sa) < 0)
@@ -30,6 +40,16 @@ static int http_connect(const char *addr)
     fd = socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
     if (fd < 0)
         return -1;
+    if (source[0]) {
+        memset(&from, 0, sizeof from);
+        from.sin_family = AF_INET;
+        if (inet_pton(AF_INET, source, &from.sin_addr) != 1 ||
+            bind(fd, (struct sockaddr *)&from, sizeof from) < 0) {
+            fprintf(stderr, "http: bind %s: %s\n", source, strerror(errno));
+            close(fd);
+            return -1;
+        }
+    }
     if (connect(fd, (struct sockaddr *)&sa, sizeof sa) < 0) {
         fprintf(stderr, "http: connect %s: %s\n", addr, strerror(errno));
         close(fd);
@@ -159,47 +179,48 @@ static int is_chunked(const char *head)
            strcasecmp(v, "chunked") == 0;
 }
 
-/* Send req (len bytes) and then body (NULL: none) to addr, read the
- * answer to its end and parse it into a; what names the request in
- * messages. 0, or -1 with a message. */
-static int exchange(const char *addr, const char *req, size_t len_req,
-                    const char *body, const char *what, struct http_answer *a,
-                    int timeout_ms)
+/* Send head and body (len and blen bytes) on a connection of its own,
+ * and read the answer to its end. */
+static int http_exchange_parts(const char *addr, const char *head, size_t len,
+                               const char *body, size_t blen,
+                               struct http_answer *a, int timeout_ms)
 {
     static char buf[HTTP_HEAD_MAX + 2 * HTTP_BODY_MAX];
     double deadline = emu_now_ms() + timeout_ms;
-    size_t len = 0, hlen, blen;
+    size_t got = 0, hlen, rest;
     char *he;
     int fd, eof = 0;
 
     memset(a, 0, sizeof *a);
-    fd = http_connect(addr);
+    fd = http_open(addr);
     if (fd < 0)
         return -1;
-    if (send_all(fd, req, len_req) < 0 ||
-        (body && send_all(fd, body, strlen(body)) < 0)) {
-        fprintf(stderr, "http: %s: send failed\n", what);
+    if (send_all(fd, head, len) < 0 ||
+        (blen && send_all(fd, body, blen) < 0)) {
+        fprintf(stderr, "http: %.*s: send failed\n", (int)strcspn(head, "\r"),
+                head);
         close(fd);
         return -1;
     }
     for (;;) {
-        long r = read_some(fd, buf + len, sizeof buf - 1 - len, deadline);
+        long r = read_some(fd, buf + got, sizeof buf - 1 - got, deadline);
 
         if (r == 0)
             break;
         if (r < 0) {
-            fprintf(stderr, "http: %s: %s\n", what,
+            fprintf(stderr, "http: %.*s: %s\n", (int)strcspn(head, "\r"), head,
                     r == -1 ? "timeout" : "read failed");
             close(fd);
             return -1;
         }
-        len += (size_t)r;
+        got += (size_t)r;
     }
     close(fd);
-    buf[len] = '\0';
-    he = head_end(buf, len);
+    buf[got] = '\0';
+    he = head_end(buf, got);
     if (!he || sscanf(buf, "HTTP/1.%*d %d", &a->status) != 1) {
-        fprintf(stderr, "http: %s: no HTTP answer\n", what);
+        fprintf(stderr, "http: %.*s: no HTTP answer\n",
+                (int)strcspn(head, "\r"), head);
         return -1;
     }
     hlen = (size_t)(he - buf);
@@ -207,19 +228,20 @@ static int exchange(const char *addr, const char *req, size_t len_req,
         return -1;
     memcpy(a->head, buf, hlen);
     a->head[hlen] = '\0';
-    blen = len - hlen;
+    rest = got - hlen;
     if (is_chunked(a->head)) {
-        if (dechunk(he, &blen, a->body, &a->body_len, sizeof a->body, &eof) <
+        if (dechunk(he, &rest, a->body, &a->body_len, sizeof a->body, &eof) <
                 0 ||
             !eof) {
-            fprintf(stderr, "http: %s: bad chunked body\n", what);
+            fprintf(stderr, "http: %.*s: bad chunked body\n",
+                    (int)strcspn(head, "\r"), head);
             return -1;
         }
     } else {
-        if (blen >= sizeof a->body)
+        if (rest >= sizeof a->body)
             return -1;
-        memcpy(a->body, he, blen);
-        a->body_len = blen;
+        memcpy(a->body, he, rest);
+        a->body_len = rest;
     }
     a->body[a->body_len] = '\0';
     return 0;
@@ -229,7 +251,7 @@ int http_request(const char *addr, const char *method, const char *path,
                  const char *headers, const char *body, struct http_answer *a,
                  int timeout_ms)
 {
-    char req[HTTP_HEAD_MAX], what[128];
+    char req[HTTP_HEAD_MAX];
     int n;
 
     /* headers may name the Host themselves (a test of the Host check). */
@@ -246,15 +268,21 @@ int http_request(const char *addr, const char *method, const char *path,
     n += snprintf(req + n, sizeof req - (size_t)n, "\r\n");
     if (n < 0 || (size_t)n >= sizeof req)
         return -1;
-    snprintf(what, sizeof what, "%s %s", method, path);
-    return exchange(addr, req, (size_t)n, body, what, a, timeout_ms);
+    return http_exchange_parts(addr, req, (size_t)n, body,
+                               body ? strlen(body) : 0, a, timeout_ms);
+}
+
+int http_exchange(const char *addr, const void *req, size_t len,
+                  struct http_answer *a, int timeout_ms)
+{
+    return http_exchange_parts(addr, (const char *)req, len, NULL, 0, a,
+                               timeout_ms);
 }
 
 int http_request_raw(const char *addr, const char *req, struct http_answer *a,
                      int timeout_ms)
 {
-    return exchange(addr, req, strlen(req), NULL, "raw request", a,
-                    timeout_ms);
+    return http_exchange(addr, req, strlen(req), a, timeout_ms);
 }
 
 int http_stream_open(struct http_stream *s, const char *addr, const char *path,
@@ -278,7 +306,7 @@ int http_stream_open_with(struct http_stream *s, const char *addr,
                  "GET %s HTTP/1.1\r\nHost: %s\r\nAccept: text/event-stream\r\n"
                  "%s\r\n",
                  path, addr, headers ? headers : "");
-    s->fd = http_connect(addr);
+    s->fd = http_open(addr);
     if (s->fd < 0)
         return -1;
     if (send_all(s->fd, req, (size_t)n) < 0)
@@ -461,7 +489,7 @@ int http_load(const char *addr, const char *path, int n, int timeout_ms)
     /* Every connection open and its request sent before any answer is
      * read: n requests in the server's hands at once. */
     for (i = 0; i < n; i++) {
-        pfd[i].fd = http_connect(addr);
+        pfd[i].fd = http_open(addr);
         pfd[i].events = POLLIN;
         if (pfd[i].fd < 0 || send_all(pfd[i].fd, req, (size_t)len) < 0)
             goto out;
@@ -503,4 +531,186 @@ out:
     free(head);
     free(got);
     return ok;
+}
+
+/* ---- a JSON checker: is an answer one valid JSON value? ---- */
+
+struct json_in {
+    const unsigned char *p, *end;
+    int depth;
+};
+
+static void json_ws(struct json_in *in)
+{
+    while (in->p < in->end && (*in->p == ' ' || *in->p == '\t' ||
+                               *in->p == '\n' || *in->p == '\r'))
+        in->p++;
+}
+
+/* One UTF-8 character of a string (its first byte at in->p, >= 0x80):
+ * 0, or -1 for a byte sequence that is not UTF-8. */
+static int json_utf8(struct json_in *in)
+{
+    const unsigned char *p = in->p;
+    unsigned char lo = 0x80, hi = 0xbf;
+    int n, i;
+
+    if (*p >= 0xc2 && *p <= 0xdf)
+        n = 1;
+    else if (*p >= 0xe0 && *p <= 0xef)
+        n = 2;
+    else if (*p >= 0xf0 && *p <= 0xf4)
+        n = 3;
+    else
+        return -1;
+    /* No overlong forms, no surrogates, nothing past U+10FFFF. */
+    if (*p == 0xe0)
+        lo = 0xa0;
+    else if (*p == 0xed)
+        hi = 0x9f;
+    else if (*p == 0xf0)
+        lo = 0x90;
+    else if (*p == 0xf4)
+        hi = 0x8f;
+    if (in->end - p <= n)
+        return -1;
+    for (i = 1; i <= n; i++) {
+        if (p[i] < (i == 1 ? lo : 0x80) || p[i] > (i == 1 ? hi : 0xbf))
+            return -1;
+    }
+    in->p += n + 1;
+    return 0;
+}
+
+static int json_string(struct json_in *in)
+{
+    int i;
+
+    in->p++; /* the quote */
+    while (in->p < in->end && *in->p != '"') {
+        if (*in->p < 0x20)
+            return -1;
+        if (*in->p >= 0x80) {
+            if (json_utf8(in) < 0)
+                return -1;
+            continue;
+        }
+        if (*in->p++ != '\\')
+            continue;
+        if (in->p == in->end)
+            return -1;
+        if (*in->p == 'u') {
+            for (i = 1; i <= 4; i++)
+                if (in->p + i >= in->end || !isxdigit(in->p[i]))
+                    return -1;
+            in->p += 5;
+        } else if (strchr("\"\\/bfnrt", *in->p) && *in->p) {
+            in->p++;
+        } else {
+            return -1;
+        }
+    }
+    if (in->p == in->end)
+        return -1;
+    in->p++;
+    return 0;
+}
+
+static int json_value(struct json_in *in);
+
+/* An object or an array (its opening bracket at in->p). */
+static int json_members(struct json_in *in, int object)
+{
+    const unsigned char close = object ? '}' : ']';
+
+    if (++in->depth > 64)
+        return -1;
+    in->p++;
+    json_ws(in);
+    if (in->p < in->end && *in->p == close) {
+        in->p++;
+        in->depth--;
+        return 0;
+    }
+    for (;;) {
+        json_ws(in);
+        if (object) {
+            if (in->p == in->end || *in->p != '"' || json_string(in) < 0)
+                return -1;
+            json_ws(in);
+            if (in->p == in->end || *in->p++ != ':')
+                return -1;
+        }
+        if (json_value(in) < 0)
+            return -1;
+        json_ws(in);
+        if (in->p == in->end)
+            return -1;
+        if (*in->p == close) {
+            in->p++;
+            in->depth--;
+            return 0;
+        }
+        if (*in->p++ != ',')
+            return -1;
+    }
+}
+
+static int json_value(struct json_in *in)
+{
+    static const char *const words[] = {"true", "false", "null"};
+    size_t i, n;
+
+    json_ws(in);
+    if (in->p == in->end)
+        return -1;
+    if (*in->p == '{' || *in->p == '[')
+        return json_members(in, *in->p == '{');
+    if (*in->p == '"')
+        return json_string(in);
+    for (i = 0; i < sizeof words / sizeof words[0]; i++) {
+        n = strlen(words[i]);
+        if ((size_t)(in->end - in->p) >= n &&
+            memcmp(in->p, words[i], n) == 0) {
+            in->p += n;
+            return 0;
+        }
+    }
+    /* A number: -?int frac? exp? */
+    if (*in->p == '-')
+        in->p++;
+    if (in->p == in->end || !isdigit(*in->p))
+        return -1;
+    if (*in->p == '0')
+        in->p++;
+    else
+        while (in->p < in->end && isdigit(*in->p))
+            in->p++;
+    if (in->p < in->end && *in->p == '.') {
+        if (++in->p == in->end || !isdigit(*in->p))
+            return -1;
+        while (in->p < in->end && isdigit(*in->p))
+            in->p++;
+    }
+    if (in->p < in->end && (*in->p == 'e' || *in->p == 'E')) {
+        in->p++;
+        if (in->p < in->end && (*in->p == '+' || *in->p == '-'))
+            in->p++;
+        if (in->p == in->end || !isdigit(*in->p))
+            return -1;
+        while (in->p < in->end && isdigit(*in->p))
+            in->p++;
+    }
+    return 0;
+}
+
+int http_json_valid(const char *text, size_t len)
+{
+    struct json_in in = {(const unsigned char *)text,
+                         (const unsigned char *)text + len, 0};
+
+    if (json_value(&in) < 0)
+        return 0;
+    json_ws(&in);
+    return in.p == in.end;
 }

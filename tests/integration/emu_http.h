@@ -1,7 +1,9 @@
 /*
  * An HTTP client for the tests of the daemon's web page (--web): plain
  * requests (one connection each, "Connection: close", the answer read to
- * its end) and a Server-Sent Events stream read event by event. HTTP/1.1
+ * its end), requests sent byte for byte as a test wrote them, and a
+ * Server-Sent Events stream read event by event; from another loopback
+ * address when a test needs a peer of its own. HTTP/1.1
  * as the daemon's server speaks it: chunked bodies are decoded, nothing
  * else of HTTP is needed. Every wait takes a timeout, as everywhere in
  * the integration tests.
@@ -32,10 +34,28 @@ int http_request(const char *addr, const char *method, const char *path,
  * -1 with a message on stderr. */
 int http_request_raw(const char *addr, const char *req, struct http_answer *a,
                      int timeout_ms);
+/* The request req (len bytes, head and body, as they are) on a
+ * connection of its own, and its answer read to the end: for requests
+ * http_request does not make (a chunked body, bytes it would not send).
+ * 0, or -1 (no answer: the connection was closed or reset without one). */
+int http_exchange(const char *addr, const void *req, size_t len,
+                  struct http_answer *a, int timeout_ms);
 /* The value of header name in a (case-insensitive name) into buf; NULL
  * when absent. */
 const char *http_header(const struct http_answer *a, const char *name,
                         char *buf, size_t cap);
+
+/* 1 when text (len bytes) is one JSON value (RFC 8259) in valid UTF-8,
+ * else 0. */
+int http_json_valid(const char *text, size_t len);
+
+/* Connect to addr: the socket, or -1 with a message on stderr. Every
+ * connection of this client is made here. */
+int http_open(const char *addr);
+/* Make the connections from now on from the local address ip (e.g.
+ * "127.0.0.2", a peer of its own for the server); NULL or "": the
+ * system's choice again. */
+void http_source(const char *ip);
 
 /* An open GET whose body is read as it comes: an event stream. */
 struct http_stream {

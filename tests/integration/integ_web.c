@@ -5,7 +5,17 @@
  * - GET / is the page, and its script and style are served with their
  *   types; HEAD answers without a body; an unknown path is 404, a wrong
  *   method 405 with Allow, a POST from another site's page (Origin) 403,
- *   a body over 4 KiB 413;
+ *   a body over 4 KiB 413, chunked too (not a reset; a chunked form
+ *   within the cap is taken);
+ * - a form is read only as its media type: application/x-www-form-
+ *   urlencoded exactly, case aside, with parameters; ...XYZ, ...-not,
+ *   text/plain and text/plainfoo are 415 and change nothing; routes that
+ *   take no form do not decode one (40 fields to POST /stop or GET
+ *   /state.json, from=nothing to GET /script/output: no effect), one that
+ *   does refuses 40 fields (400);
+ * - a NUL or control character decoded from a form's name or value, or
+ *   the URL's path or query, is 400 (line=part+25%00 sets no part,
+ *   /state.json%00.txt is not /state.json);
  * - GET /state.json is the control channel's state byte for byte (time
  *   paused, so the two cannot differ in time); GET /info.json has the
  *   model's stroke and every flag's name by bit;
@@ -17,8 +27,9 @@
  * - POST /stop stops a motion (40h: AXIS_STOPPED, not MOVING, at once; the
  *   motion ends E_CMD_ABORTED); POST /ack clears a FAST STOP (40h and
  *   the control channel's state);
- * - 32 streams at once all see a change; closed by their clients they are
- *   freed (the daemon's descriptors come back) with no change to push;
+ * - 15 streams at once (16 with the first: as many as an address may
+ *   have) all see a change; closed by their clients they are freed (the
+ *   daemon's descriptors come back) with no change to push;
  * - the daemon exits 0 with a stream open.
  *
  * Built without libmicrohttpd (WSG_TEST_HAVE_WEB 0) it is skipped.
@@ -36,8 +47,9 @@
 #define WSG_TEST_HAVE_WEB 0
 #endif
 
-/* How many event streams at once in the fan-out test. */
-#define NSTREAMS 32
+/* How many event streams at once in the fan-out test: with the test's
+ * own, as many as one address may have (WSG_WEB_PEER_STREAMS_MAX). */
+#define NSTREAMS 15
 /* Room for one event's name and data (a log event is up to 16 KiB). */
 #define EV_MAX 20000
 /* The largest request body the daemon takes (WSG_WEB_BODY_MAX). */
@@ -377,6 +389,110 @@ static void test_control(struct ctl *k)
     CHECK_EQ(get("GET", "/control", NULL, NULL), 405);
 }
 
+/* A request sent as it is, with a chunked body of n bytes of 'x' in
+ * chunks of 1000 (form: the bytes are the form's, not x's): the status,
+ * or -1 (no answer, the connection was reset). */
+static int chunked(const char *path, const char *type, const char *form,
+                   size_t n)
+{
+    static char msg[16384];
+    size_t used, off, k;
+
+    used = (size_t)snprintf(msg, sizeof msg,
+                            "POST %s HTTP/1.1\r\nHost: %s\r\n"
+                            "Connection: close\r\n%s"
+                            "Transfer-Encoding: chunked\r\n\r\n",
+                            path, web, type ? type : "");
+    if (form)
+        n = strlen(form);
+    for (off = 0; off < n && used + 1100 < sizeof msg; off += k) {
+        k = n - off < 1000 ? n - off : 1000;
+        used += (size_t)snprintf(msg + used, sizeof msg - used, "%zx\r\n", k);
+        if (form)
+            memcpy(msg + used, form + off, k);
+        else
+            memset(msg + used, 'x', k);
+        used += k;
+        memcpy(msg + used, "\r\n", 2);
+        used += 2;
+    }
+    used += (size_t)snprintf(msg + used, sizeof msg - used, "0\r\n\r\n");
+    if (http_exchange(web, msg, used, &ans, EMU_REPLY_MS) < 0)
+        return -1;
+    return ans.status;
+}
+
+/* What a request carries, checked: a chunked body over the cap is 413
+ * as a Content-Length one is (not a reset); a form is decoded only where
+ * a route takes one, and only when its type is exactly a form's; a NUL
+ * or control character anywhere in the decoded URL or form is 400. */
+static void test_bodies(struct ctl *k)
+{
+    char many[1024] = "a=1";
+    int i;
+
+    /* Chunked: a form within the cap is taken, a body over it 413. */
+    CHECK_EQ(chunked("/control", FORM, "line=part+25", 0), 200);
+    CHECK(strstr(ctl_cmd(k, "state"), "\"part\":{\"width\":25.000"));
+    CHECK_EQ(get("POST", "/control", FORM, "line=part+none"), 200);
+    CHECK_EQ(chunked("/ack", NULL, NULL, BODY_MAX), 200);
+    CHECK_EQ(chunked("/ack", NULL, NULL, BODY_MAX + 1), 413);
+    CHECK(strstr(ans.body, "\"error\":\"body larger than 4096 bytes\"") !=
+          NULL);
+    CHECK_EQ(chunked("/control", FORM, NULL, 3 * BODY_MAX), 413);
+
+    /* The form's media type, exactly: case aside, with parameters. */
+    CHECK_EQ(get("POST", "/control",
+                 "Content-Type: application/x-www-form-urlencodedXYZ\r\n",
+                 "line=part+25"),
+             415);
+    CHECK_EQ(get("POST", "/control", "Content-Type: text/plainfoo\r\n",
+                 "line=part+25"),
+             415);
+    CHECK_EQ(get("POST", "/control", "Content-Type: text/plain\r\n",
+                 "line=part+25"),
+             415);
+    CHECK_EQ(get("POST", "/control",
+                 "Content-Type: application/x-www-form-urlencoded-not\r\n",
+                 "line=part+25"),
+             415);
+    CHECK(strstr(ctl_cmd(k, "state"), "\"part\":null"));
+    CHECK_EQ(get("POST", "/control",
+                 "Content-Type: Application/X-WWW-Form-Urlencoded ; "
+                 "charset=UTF-8\r\n",
+                 "line=part+25"),
+             200);
+    CHECK_EQ(get("POST", "/control",
+                 "Content-Type: application/x-www-form-urlencoded;"
+                 "charset=UTF-8\r\n",
+                 "line=part+none"),
+             200);
+    CHECK(strstr(ctl_cmd(k, "state"), "\"part\":null"));
+    /* No body: no type needed (the fields may be in the query). */
+    CHECK_EQ(get("POST", "/control?line=part+none", NULL, NULL), 200);
+
+    /* Routes that take no form do not decode one: more fields than a
+     * form may have, or a field a handler would read, change nothing. */
+    for (i = 1; i < 40; i++)
+        snprintf(many + strlen(many), sizeof many - strlen(many), "&f%d=1", i);
+    CHECK_EQ(get("POST", "/stop", FORM, many), 200);
+    CHECK_EQ(get("GET", "/state.json", FORM, many), 200);
+    CHECK_EQ(get("GET", "/script/output?from=0", FORM, "from=nothing"), 200);
+    CHECK(strstr(ans.body, "\"from\":0,") != NULL);
+    /* ... where one is taken, too many fields are refused. */
+    CHECK_EQ(get("POST", "/control", FORM, many), 400);
+
+    /* A NUL or control character, decoded, in a form or the URL. */
+    CHECK_EQ(get("POST", "/control", FORM, "line=part+25%00"), 400);
+    CHECK_EQ(get("POST", "/control", FORM, "li%00ne=part+25"), 400);
+    CHECK_EQ(get("POST", "/control", FORM, "line=part+25%01"), 400);
+    CHECK_EQ(get("POST", "/control?line=part+25%00", NULL, NULL), 400);
+    CHECK(strstr(ctl_cmd(k, "state"), "\"part\":null"));
+    CHECK_EQ(get("GET", "/state.json%00.txt", NULL, NULL), 400);
+    CHECK_EQ(get("GET", "/state.json?x=%1f", NULL, NULL), 400);
+    CHECK_EQ(get("GET", "/state.json?x=%20", NULL, NULL), 200);
+}
+
 /* On loopback, another site's name in Host is not answered (DNS
  * rebinding); loopback names are. */
 static void test_host(void)
@@ -471,6 +587,7 @@ int main(int argc, char **argv)
     test_many(&e, &k);
     test_log(&c);
     test_control(&k);
+    test_bodies(&k);
     test_host();
     test_load(&c);
 

@@ -11,11 +11,17 @@
  *   the directory; a symbolic link planted in the directory, pointing
  *   outside, is neither read, written, deleted nor run (403), and the file
  *   it points to is unchanged;
+ * - names with a NUL or a control character, percent-encoded in the
+ *   path, the query or the form (ping.lua%00.txt, ping.lua%0a): 400, and
+ *   the name they would be cut to (ping.lua) is neither written, deleted
+ *   nor run;
  * - caps: 256 KiB is taken, a Content-Length of one byte more refused
  *   (413) before the body is sent; the directory's bounds (--script-quota,
  *   --script-files): an upload past its bytes or count is refused (507;
  *   413 for one larger than the quota itself) and not written, a
  *   replacement counts for its new size;
+ *   (413) before the body is sent; the same chunked: 256 KiB taken, a
+ *   byte more answered 413 (not a reset) and nothing written;
  * - run: a script uploaded and run from the page (POST /script/run)
  *   registers its own command ID and answers it over TCP; the state shows
  *   it running (D19, "script"); what it prints comes in the event
@@ -30,6 +36,9 @@
  * - race: runs of a name that another process keeps swapping between a
  *   file of the directory and a link to a script outside it each run the
  *   directory's file or are refused (403), never the file outside;
+ *   an error as long as the host keeps, of control characters and a
+ *   character cut in two, is still answered by the run (422) and GET
+ *   /script/status, in valid JSON;
  * - without --script-dir every endpoint says so (409, naming the option).
  *
  * Built without libmicrohttpd (WSG_TEST_HAVE_WEB 0) it is skipped.
@@ -202,6 +211,11 @@ static void test_names(void)
         ("/scripts/"
          "a123456789012345678901234567890123456789012345678901234567890.lua"),
     };
+    static const char *const nul[] = {
+        "/scripts/ping.lua%00.txt", "/scripts/ping.lua%00",
+        "/scripts/ping.lua%0a",     "/scripts/ping.lua%7F",
+        "/scripts/ping.lua?x=%00",
+    };
     char path[512], link[512], parent_x[512];
     size_t i;
     FILE *f;
@@ -227,6 +241,23 @@ static void test_names(void)
                  ".lua",
                  NULL),
              200);
+    /* A NUL or a control character, percent-encoded: refused whole, not
+     * cut at the NUL to a name that exists (ping.lua). */
+    for (i = 0; i < sizeof nul / sizeof nul[0]; i++) {
+        CHECK_EQ(req("PUT", nul[i], "print('cut')\n"), 400);
+        if (ans.status != 400)
+            fprintf(stderr, "PUT %s: %d %s\n", nul[i], ans.status, ans.body);
+        CHECK_EQ(req("GET", nul[i], NULL), 400);
+        CHECK_EQ(req("DELETE", nul[i], NULL), 400);
+    }
+    CHECK_EQ(req("GET", "/scripts/ping.lua", NULL), 200);
+    CHECK(strcmp(ans.body, ping_lua) == 0);
+    CHECK_EQ(post("/script/run", "name=ping.lua%00.txt"), 400);
+    CHECK_EQ(post("/script/run", "na%00me=ping.lua"), 400);
+    CHECK_EQ(post("/script/run?name=ping.lua%00.txt", ""), 400);
+    CHECK_EQ(post("/script/run", "name=ping.lua%0A"), 400);
+    CHECK_EQ(req("GET", "/script/status", NULL), 200);
+    CHECK(strstr(ans.body, "\"running\":false") != NULL);
     snprintf(parent_x, sizeof parent_x, "%s/../x.lua", dir);
     CHECK(!exists(parent_x));
     CHECK(!exists("x.lua"));
@@ -308,6 +339,35 @@ out:
     return status;
 }
 
+/* PUT path with the len bytes of body in chunks of 16 KiB: the status,
+ * or -1 (no answer). */
+static int put_chunked(const char *path, const char *body, size_t len)
+{
+    size_t cap = len + len / 1024 + 1024, used, off, n;
+    char *msg = malloc(cap);
+    int r;
+
+    if (!msg)
+        return -1;
+    used = (size_t)snprintf(msg, cap,
+                            "PUT %s HTTP/1.1\r\nHost: %s\r\n"
+                            "Connection: close\r\n"
+                            "Transfer-Encoding: chunked\r\n\r\n",
+                            path, web);
+    for (off = 0; off < len; off += n) {
+        n = len - off < 16384 ? len - off : 16384;
+        used += (size_t)snprintf(msg + used, cap - used, "%zx\r\n", n);
+        memcpy(msg + used, body + off, n);
+        used += n;
+        memcpy(msg + used, "\r\n", 2);
+        used += 2;
+    }
+    used += (size_t)snprintf(msg + used, cap - used, "0\r\n\r\n");
+    r = http_exchange(web, msg, used, &ans, EMU_REPLY_MS);
+    free(msg);
+    return r < 0 ? -1 : ans.status;
+}
+
 static void test_caps(void)
 {
     char *big = malloc(UPLOAD_MAX + 1);
@@ -322,6 +382,15 @@ static void test_caps(void)
     CHECK_EQ(req("DELETE", "/scripts/big.lua", NULL), 200);
     CHECK_EQ(head_only("PUT", "/scripts/big.lua", UPLOAD_MAX + 1), 413);
     snprintf(name, sizeof name, "%s/big.lua", dir);
+    CHECK(!exists(name));
+    /* The same sizes chunked (no Content-Length to tell): the cap taken,
+     * a byte more answered 413 as well, not a reset. */
+    CHECK_EQ(put_chunked("/scripts/big.lua", big, UPLOAD_MAX), 201);
+    CHECK_EQ(req("DELETE", "/scripts/big.lua", NULL), 200);
+    big[UPLOAD_MAX] = '-'; /* a byte more: its NUL no longer */
+    CHECK_EQ(put_chunked("/scripts/big.lua", big, UPLOAD_MAX + 1), 413);
+    CHECK(strstr(ans.body, "\"error\":\"body larger than 262144 bytes\"") !=
+          NULL);
     CHECK(!exists(name));
     free(big);
 }
@@ -592,6 +661,30 @@ static void test_quota(const char *exe)
     unlink(path);
 }
 
+/* A script whose error is as long as the host keeps, made of what JSON
+ * escapes longest (control characters, 6 bytes each) and ending in a
+ * two-byte character the host's cut may split: the run's 422 and GET
+ * /script/status are still answered, each in valid JSON (UTF-8). */
+static void test_long_error(void)
+{
+    static const char long_lua[] =
+        "error(string.rep('\\1', 400) .. string.rep('\\195\\169', 100), 0)\n";
+
+    CHECK_EQ(req("PUT", "/scripts/long.lua", long_lua), 201);
+    CHECK_EQ(post("/script/run", "name=long.lua"), 422);
+    CHECK(http_json_valid(ans.body, ans.body_len));
+    CHECK(strstr(ans.body, "\\u0001\\u0001") != NULL);
+    CHECK_EQ(req("GET", "/script/status", NULL), 200);
+    CHECK(http_json_valid(ans.body, ans.body_len));
+    if (!http_json_valid(ans.body, ans.body_len))
+        fprintf(stderr, "status: %s\n", ans.body);
+    CHECK(strstr(ans.body, "\"failed\":true") != NULL);
+    CHECK(strstr(ans.body, "\"error\":\"\\u0001\\u0001") != NULL);
+    CHECK(strstr(ans.body, "\\u0001\xc3\xa9") != NULL);
+    CHECK(strstr(ans.body, "\"memory_max\":") != NULL);
+    CHECK_EQ(req("DELETE", "/scripts/long.lua", NULL), 200);
+}
+
 /* A daemon without --script-dir: every endpoint says what is missing. */
 static void test_no_dir(const char *exe)
 {
@@ -639,6 +732,7 @@ int main(int argc, char **argv)
     test_run(&e);
     test_control_run();
     test_race();
+    test_long_error();
     CHECK_EQ(emu_stop(&e), 0);
     /* Only what the test made. */
     snprintf(path, sizeof path, "%s/ping.lua", dir);

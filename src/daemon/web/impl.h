@@ -34,6 +34,7 @@
 #define WSG_WEB_LOG_EVENT_MAX (16u * 1024u)
 
 struct web_sub;
+struct web_conn;
 
 struct wsg_web {
     struct wsg_daemon *d;
@@ -49,11 +50,14 @@ struct wsg_web {
     char local[WSG_ADDR_LEN];
     /* CLOCK_MONOTONIC deadlines, 0 for none: MHD wants to run by mhd_due
      * (a connection's timeout, or work it left for the next round), a
-     * change waits to be pushed at push_due; the timer is armed for the
-     * earlier one (armed). */
+     * change waits to be pushed at push_due, a request's deadline passes
+     * at conn_due; the timer is armed for the earliest (armed). */
     uint64_t mhd_due;
     uint64_t push_due;
+    uint64_t conn_due; /* the first request's deadline (server.c) */
     uint64_t armed;
+    /* The connections, each with the time its request started. */
+    struct web_conn *conns;
     /* The event stream: its subscribers, and the newest event. */
     struct web_sub *subs;
     size_t nsubs;
@@ -104,8 +108,11 @@ struct wsg_web_req {
     char *body;
     size_t body_len;
     size_t body_cap;
-    int refused;  /* answered already (a body too large) */
-    int overfull; /* a field too long, or too many */
+    int refused; /* answered already (a body too large) */
+    int too_big; /* a chunked body past the cap: dropped, 413 at its end */
+    int bad_url; /* its URL decodes to a control character: 400 */
+    size_t body_seen; /* bytes of body received, kept or not */
+    int overfull;     /* a field too long, or too many */
     size_t nfields;
     struct wsg_web_field fields[WSG_WEB_FIELDS_MAX];
 };
@@ -117,7 +124,12 @@ typedef enum MHD_Result (*wsg_web_serve_fn)(struct wsg_web *web,
 struct wsg_web_route {
     const char *path; /* the URL; ending in '/': every URL under it */
     unsigned methods; /* enum wsg_web_method bits */
-    size_t body_max;  /* the largest body it takes; 0: the default */
+    /* The methods whose body is a form, decoded into the fields; those
+     * whose body is kept as it is (an upload). Any other body is read
+     * (up to the cap) and dropped, never decoded. */
+    unsigned form;
+    unsigned raw;
+    size_t body_max; /* the largest body it takes; 0: the default */
     wsg_web_serve_fn serve;
 };
 
@@ -140,12 +152,30 @@ enum MHD_Result wsg_web_error(struct MHD_Connection *conn, unsigned status,
 /* A field of the request's form (or its query string); NULL if absent. */
 const char *wsg_web_field(const struct wsg_web_req *req, const char *name);
 /* s as a JSON string body (no quotes) into buf; returns its length, or
- * cap when it does not fit (buf then holds a cut that is still valid). */
+ * cap when it does not fit (buf then holds a cut that is still valid:
+ * whole escapes and whole characters). Bytes that are not UTF-8 become
+ * U+FFFD, so the answer is UTF-8 whatever s holds. */
 size_t wsg_web_escape(char *buf, size_t cap, const char *s, size_t len);
+/* n, or less so that s's first bytes end with a whole UTF-8 character
+ * (not in the middle of one; bytes that are not UTF-8 count as whole). */
+size_t wsg_web_utf8_whole(const char *s, size_t n);
 /* Bring the gripper's time up to date before acting on it, and have it
  * rescheduled after (as the control channel does). */
 void wsg_web_touch(struct wsg_web *web);
 void wsg_web_done(struct wsg_web *web);
+
+/* ---- what a request carries (request.c) ---- */
+
+/* 1 when the Content-Type value is the media type type: the same name
+ * (case aside), then nothing or its parameters (";charset=UTF-8"). */
+int wsg_web_media_is(const char *value, const char *type);
+/* 1 when the URL (path and query, as sent: before percent-decoding)
+ * holds a NUL or a control character, raw or percent-encoded. */
+int wsg_web_url_bad(const char *uri);
+/* req's body, a url-encoded form, into req's fields: 0; -E2BIG for too
+ * many fields or one too long, -EILSEQ for a NUL or control character in
+ * a name or a value. */
+int wsg_web_form_decode(struct wsg_web_req *req);
 
 /* ---- files (files.c) ---- */
 

@@ -40,6 +40,12 @@
 #define SCRIPT_LIST_MAX 1024u
 /* One entry of the list: the name escaped and two numbers. */
 #define SCRIPT_ENTRY_MAX (SCRIPT_NAME_MAX + 96u)
+/* GET /script/status: the script's file name (any name the control
+ * channel ran: up to NAME_MAX bytes, 6 each escaped at worst) and its
+ * error (the host keeps 511 bytes: all of them escaped at worst; a
+ * longer one is cut), each escaped with its NUL. */
+#define STATUS_NAME_MAX  (6u * NAME_MAX + 1u)
+#define STATUS_ERROR_MAX (6u * 512u + 1u)
 
 struct script_entry {
     char name[SCRIPT_NAME_MAX + 1];
@@ -496,14 +502,18 @@ static enum MHD_Result script_run(struct wsg_web *web, struct wsg_web_req *req)
 }
 
 /* GET /script/status: the state's "script" object with what does not
- * fit there: the whole error, the host's state and memory. */
+ * fit there: the whole error, the host's state and memory. Always
+ * answered: the name and the error are escaped into rooms that together
+ * fit the answer, each cut at a whole character when longer. */
 static enum MHD_Result script_status(struct wsg_web *web,
                                      struct wsg_web_req *req)
 {
-    char name[2 * PATH_MAX], error[WSG_WEB_ANSWER_MAX];
+    char name[STATUS_NAME_MAX], error[STATUS_ERROR_MAX];
+    char out[STATUS_NAME_MAX + STATUS_ERROR_MAX + 192];
     struct wsg_script_status st;
     struct wsg_script *h;
     const char *base;
+    int n;
 
     if (wsg_gripper_script(web->g, &h) < 0)
         return wsg_web_error(req->conn, MHD_HTTP_INTERNAL_SERVER_ERROR,
@@ -517,14 +527,20 @@ static enum MHD_Result script_status(struct wsg_web *web,
         wsg_web_escape(name, sizeof name, base, strlen(base));
     if (st.error)
         wsg_web_escape(error, sizeof error, st.error, strlen(st.error));
-    return wsg_web_json(
-        req->conn, MHD_HTTP_OK,
-        "{\"name\":%s%s%s,\"running\":%s,\"failed\":%s,"
-        "\"error\":%s%s%s,\"memory\":%lu,\"memory_max\":%lu}",
-        base ? "\"" : "", base ? name : "null", base ? "\"" : "",
-        st.running ? "true" : "false", st.failed ? "true" : "false",
-        st.error ? "\"" : "", st.error ? error : "null", st.error ? "\"" : "",
-        (unsigned long)st.memory, (unsigned long)st.memory_max);
+    n = snprintf(out, sizeof out,
+                 "{\"name\":%s%s%s,\"running\":%s,\"failed\":%s,"
+                 "\"error\":%s%s%s,\"memory\":%lu,\"memory_max\":%lu}",
+                 base ? "\"" : "", base ? name : "null", base ? "\"" : "",
+                 st.running ? "true" : "false", st.failed ? "true" : "false",
+                 st.error ? "\"" : "", st.error ? error : "null",
+                 st.error ? "\"" : "", (unsigned long)st.memory,
+                 (unsigned long)st.memory_max);
+    /* The rooms are sized so that it fits: this cannot fail. */
+    if (n < 0 || (size_t)n >= sizeof out)
+        return wsg_web_error(req->conn, MHD_HTTP_INTERNAL_SERVER_ERROR,
+                             "the status does not fit the answer");
+    return wsg_web_answer(req->conn, MHD_HTTP_OK, "application/json", out,
+                          (size_t)n, 0);
 }
 
 /* GET /script/output?from=N: what the script printed from byte N on
@@ -547,10 +563,12 @@ static enum MHD_Result script_output(struct wsg_web *web,
         return wsg_web_error(req->conn, MHD_HTTP_INTERNAL_SERVER_ERROR,
                              "no memory for a script host");
     start = wsg_script_output(h, from, text, sizeof text, &n, &end);
-    /* Escaped in full, or cut: then only the bytes it holds count. */
-    took = n;
+    /* Escaped in full, or cut: then only the bytes it holds count. A
+     * character cut in two by the copy waits for the next read, whole
+     * (one at the very end is sent as it is: nothing may ever follow). */
+    took = start + n < end ? wsg_web_utf8_whole(text, n) : n;
     while (wsg_web_escape(esc, sizeof esc, text, took) == sizeof esc)
-        took /= 2;
+        took = wsg_web_utf8_whole(text, took / 2);
     return wsg_web_json(req->conn, MHD_HTTP_OK,
                         "{\"from\":%llu,\"text\":\"%s\",\"next\":%llu,"
                         "\"end\":%llu}",

@@ -38,12 +38,14 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <microhttpd.h>
+#include <netinet/in.h>
 #include <stdarg.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/epoll.h>
+#include <sys/socket.h>
 #include <sys/timerfd.h>
 #include <time.h>
 #include <unistd.h>
@@ -57,9 +59,11 @@
 
 #define NS_PER_S  1000000000ull
 #define NS_PER_MS 1000000ull
-/* An HTTP connection that sends nothing is closed after this; a browser
- * keeps one open after loading the page. A suspended event stream does
- * not time out (MHD stops its clock while suspended). */
+/* A connection on which nothing moves for this long is closed (MHD's
+ * timeout): one whose client does not read its answer. One that waits
+ * for a request is closed sooner, at the request's deadline
+ * (WSG_WEB_REQUEST_S). A suspended event stream does not time out (MHD
+ * stops its clock while suspended). */
 #define WEB_IDLE_TIMEOUT_S 60u
 /* MHD_run rounds in a row while resumes come in during them (a new
  * stream's first event): one more does it, the rest only bound the loop;
@@ -83,7 +87,8 @@ typedef char
 struct web_sub {
     struct wsg_web *web;
     struct MHD_Connection *conn;
-    struct wsg_watch hup; /* its socket while suspended; fd -1: not */
+    struct sockaddr_storage peer; /* its client's address */
+    struct wsg_watch hup;         /* its socket while suspended; fd -1: not */
     int suspended;
     int gone;         /* hung up: end the stream */
     uint64_t seq;     /* the state event it has (or is sending) */
@@ -91,6 +96,15 @@ struct web_sub {
     size_t len, off;
     char buf[WSG_WEB_LOG_EVENT_MAX];
     struct web_sub *prev, *next;
+};
+
+/* A connection, from MHD's notice of it to its close (its socket
+ * context): when the request it is receiving started, for the deadline
+ * of its head and body (WSG_WEB_REQUEST_S). */
+struct web_conn {
+    struct MHD_Connection *conn;
+    uint64_t since; /* 0: no request is being received (one is answered) */
+    struct web_conn *prev, *next;
 };
 
 static uint64_t mono_ns(void)
@@ -112,6 +126,8 @@ static void web_arm(struct wsg_web *web)
 
     if (web->push_due && (!due || web->push_due < due))
         due = web->push_due;
+    if (web->conn_due && (!due || web->conn_due < due))
+        due = web->conn_due;
     if (due == web->armed)
         return;
     memset(&its, 0, sizeof its);
@@ -165,6 +181,8 @@ static void on_mhd(struct wsg_watch *w, uint32_t events)
     web_run(w->ctx);
 }
 
+static void conns_expire(struct wsg_web *web, uint64_t now);
+
 static void on_timer(struct wsg_watch *w, uint32_t events)
 {
     struct wsg_web *web = w->ctx;
@@ -177,6 +195,8 @@ static void on_timer(struct wsg_watch *w, uint32_t events)
     /* The hook after this batch pushes what changed meanwhile. */
     if (web->push_due && web->push_due <= now)
         web->push_due = 0;
+    if (web->conn_due && web->conn_due <= now)
+        conns_expire(web, now);
     if (web->mhd_due && web->mhd_due <= now)
         web_run(web);
     else
@@ -383,6 +403,118 @@ static void web_after(void *ctx)
     web_check(ctx);
 }
 
+/* ---- connections and the deadline of a request ---- */
+
+/* MHD's idle timeout (WEB_IDLE_TIMEOUT_S) is not enough: every byte
+ * restarts it, so a client that sends a byte of its request's head now
+ * and then (slowloris) holds its slot for ever. So each connection has
+ * a clock, started when it opens and again when an answer on it is
+ * done; while it runs, the request's head and body must come within
+ * WSG_WEB_REQUEST_S, else its socket is shut down and MHD closes it. The
+ * clock stops once the request is answered: an answer being sent, such
+ * as an event stream that is idle by design, is not cut. */
+
+#define WEB_REQUEST_NS ((uint64_t)WSG_WEB_REQUEST_S * NS_PER_S)
+
+static struct web_conn *conn_of(struct MHD_Connection *conn)
+{
+    const union MHD_ConnectionInfo *ci =
+        MHD_get_connection_info(conn, MHD_CONNECTION_INFO_SOCKET_CONTEXT);
+
+    return ci ? ci->socket_context : NULL;
+}
+
+/* Shut the connection's socket down: MHD sees its end at its next run
+ * and closes it as any connection its client closed. */
+static void conn_cut(struct MHD_Connection *conn)
+{
+    const union MHD_ConnectionInfo *ci =
+        MHD_get_connection_info(conn, MHD_CONNECTION_INFO_CONNECTION_FD);
+
+    if (ci)
+        shutdown(ci->connect_fd, SHUT_RDWR);
+}
+
+/* The earliest deadline of the requests being received, anew: after a
+ * clock stopped, so that no timer is left for a request that is gone. */
+static void conns_due(struct wsg_web *web)
+{
+    const struct web_conn *c;
+    uint64_t due = 0;
+
+    for (c = web->conns; c; c = c->next)
+        if (c->since && (!due || c->since + WEB_REQUEST_NS < due))
+            due = c->since + WEB_REQUEST_NS;
+    web->conn_due = due;
+}
+
+/* Start (now) or stop (0) the clock of conn's request. Called from
+ * MHD's callbacks, inside MHD_run: web_run arms the timer after it. */
+static void conn_clock(struct wsg_web *web, struct MHD_Connection *conn,
+                       uint64_t now)
+{
+    struct web_conn *c = conn_of(conn);
+
+    if (!c || c->since == now)
+        return;
+    c->since = now;
+    if (!now)
+        conns_due(web);
+    else if (!web->conn_due || now + WEB_REQUEST_NS < web->conn_due)
+        web->conn_due = now + WEB_REQUEST_NS;
+}
+
+/* The timer: cut the connections whose request is late. */
+static void conns_expire(struct wsg_web *web, uint64_t now)
+{
+    struct web_conn *c;
+
+    for (c = web->conns; c; c = c->next) {
+        if (!c->since || now - c->since < WEB_REQUEST_NS)
+            continue;
+        conn_cut(c->conn);
+        c->since = 0;
+        web->mhd_due = now; /* MHD closes it at once */
+    }
+    conns_due(web);
+}
+
+static void on_connection(void *cls, struct MHD_Connection *conn,
+                          void **socket_context,
+                          enum MHD_ConnectionNotificationCode code)
+{
+    struct wsg_web *web = cls;
+    struct web_conn *c = *socket_context;
+
+    if (code == MHD_CONNECTION_NOTIFY_STARTED) {
+        c = calloc(1, sizeof *c);
+        if (!c) {
+            /* Without a clock it would have no deadline: refused. */
+            conn_cut(conn);
+            return;
+        }
+        c->conn = conn;
+        c->next = web->conns;
+        if (web->conns)
+            web->conns->prev = c;
+        web->conns = c;
+        *socket_context = c;
+        conn_clock(web, conn, mono_ns());
+        return;
+    }
+    if (!c)
+        return;
+    if (c->prev)
+        c->prev->next = c->next;
+    else
+        web->conns = c->next;
+    if (c->next)
+        c->next->prev = c->prev;
+    free(c);
+    *socket_context = NULL;
+    conns_due(web);
+}
+
 /* ---- answers ---- */
 
 enum MHD_Result wsg_web_answer(struct MHD_Connection *conn, unsigned status,
@@ -419,6 +551,7 @@ enum MHD_Result wsg_web_answer(struct MHD_Connection *conn, unsigned status,
 enum MHD_Result wsg_web_json(struct MHD_Connection *conn, unsigned status,
                              const char *fmt, ...)
 {
+    static const char too_long[] = "{\"error\":\"the answer does not fit\"}";
     char buf[WSG_WEB_ANSWER_MAX];
     va_list ap;
     int n;
@@ -426,41 +559,108 @@ enum MHD_Result wsg_web_json(struct MHD_Connection *conn, unsigned status,
     va_start(ap, fmt);
     n = vsnprintf(buf, sizeof buf, fmt, ap);
     va_end(ap);
+    /* Answered all the same: MHD_NO would close the connection without
+     * a word. The handlers size what they put in; this is a bug's net. */
     if (n < 0 || (size_t)n >= sizeof buf)
-        return MHD_NO;
+        return wsg_web_answer(conn, MHD_HTTP_INTERNAL_SERVER_ERROR,
+                              "application/json", too_long,
+                              sizeof too_long - 1, 1);
     return wsg_web_answer(conn, status, "application/json", buf, (size_t)n, 0);
+}
+
+/* The length of the UTF-8 character at s (n bytes left): 1..4, or 0 when
+ * s does not start one (a stray continuation byte, an overlong form, a
+ * surrogate, past U+10FFFF, or cut short). */
+static size_t utf8_len(const unsigned char *s, size_t n)
+{
+    unsigned char lo = 0x80, hi = 0xbf;
+    size_t len, i;
+
+    if (s[0] < 0x80)
+        return 1;
+    if (s[0] >= 0xc2 && s[0] <= 0xdf)
+        len = 2;
+    else if (s[0] >= 0xe0 && s[0] <= 0xef)
+        len = 3;
+    else if (s[0] >= 0xf0 && s[0] <= 0xf4)
+        len = 4;
+    else
+        return 0;
+    if (s[0] == 0xe0)
+        lo = 0xa0;
+    else if (s[0] == 0xed)
+        hi = 0x9f;
+    else if (s[0] == 0xf0)
+        lo = 0x90;
+    else if (s[0] == 0xf4)
+        hi = 0x8f;
+    if (n < len || s[1] < lo || s[1] > hi)
+        return 0;
+    for (i = 2; i < len; i++)
+        if (s[i] < 0x80 || s[i] > 0xbf)
+            return 0;
+    return len;
+}
+
+size_t wsg_web_utf8_whole(const char *s, size_t n)
+{
+    const unsigned char *u = (const unsigned char *)s;
+    size_t back, need;
+
+    /* Back over continuation bytes (three at most) to the lead byte: cut
+     * before it when its character needs more bytes than are there. */
+    for (back = 1; back <= 3 && back <= n; back++) {
+        if (u[n - back] < 0x80)
+            return n;
+        if (u[n - back] >= 0xc0) {
+            need = u[n - back] >= 0xf0 ? 4 : u[n - back] >= 0xe0 ? 3 : 2;
+            return need > back ? n - back : n;
+        }
+    }
+    return n;
 }
 
 size_t wsg_web_escape(char *buf, size_t cap, const char *s, size_t len)
 {
     static const char hex[] = "0123456789abcdef";
-    size_t used = 0, i;
+    const unsigned char *u = (const unsigned char *)s;
+    size_t used = 0, i = 0;
 
-    for (i = 0; i < len; i++) {
-        unsigned char c = (unsigned char)s[i];
+    while (i < len) {
+        unsigned char c = u[i];
+        const char *from = s + i;
         char esc[7];
-        size_t n;
+        size_t n, take;
 
         if (c == '"' || c == '\\') {
             esc[0] = '\\';
             esc[1] = (char)c;
+            from = esc;
             n = 2;
+            take = 1;
         } else if (c < 0x20 || c == 0x7f) {
             memcpy(esc, "\\u00", 4);
             esc[4] = hex[c >> 4];
             esc[5] = hex[c & 15];
+            from = esc;
             n = 6;
+            take = 1;
+        } else if ((n = utf8_len(u + i, len - i)) != 0) {
+            take = n; /* a character whole, never a part of one */
         } else {
-            esc[0] = (char)c;
-            n = 1;
+            /* Not UTF-8 (a script's bytes, a cut name): JSON must be. */
+            from = "\\ufffd";
+            n = 6;
+            take = 1;
         }
         if (used + n >= cap) {
             if (cap)
                 buf[used] = '\0';
             return cap;
         }
-        memcpy(buf + used, esc, n);
+        memcpy(buf + used, from, n);
         used += n;
+        i += take;
     }
     if (cap)
         buf[used] = '\0';
@@ -589,20 +789,95 @@ static enum MHD_Result serve_info(struct wsg_web *web, struct wsg_web_req *req)
                           used + 2, 0);
 }
 
+/* Whether a and b are the same address (the port aside). */
+static int same_peer(const struct sockaddr_storage *a,
+                     const struct sockaddr_storage *b)
+{
+    struct sockaddr_in a4, b4;
+    struct sockaddr_in6 a6, b6;
+
+    if (a->ss_family != b->ss_family)
+        return 0;
+    if (a->ss_family == AF_INET) {
+        memcpy(&a4, a, sizeof a4);
+        memcpy(&b4, b, sizeof b4);
+        return a4.sin_addr.s_addr == b4.sin_addr.s_addr;
+    }
+    if (a->ss_family == AF_INET6) {
+        memcpy(&a6, a, sizeof a6);
+        memcpy(&b6, b, sizeof b6);
+        return memcmp(&a6.sin6_addr, &b6.sin6_addr, sizeof a6.sin6_addr) == 0;
+    }
+    return 0;
+}
+
+/* A new stream beyond the caps: 503, with when to try again. The page
+ * (app.js) does: a browser's EventSource gives up on a 503. */
+static enum MHD_Result refuse_stream(struct MHD_Connection *conn,
+                                     const char *why)
+{
+    char body[WSG_WEB_ANSWER_MAX], retry[16];
+    struct MHD_Response *r;
+    enum MHD_Result ret;
+    int n;
+
+    n = snprintf(body, sizeof body, "{\"error\":\"%s\"}", why);
+    snprintf(retry, sizeof retry, "%u", WSG_WEB_RETRY_AFTER_S);
+    r = MHD_create_response_from_buffer((size_t)n, body,
+                                        MHD_RESPMEM_MUST_COPY);
+    if (!r)
+        return MHD_NO;
+    if (MHD_add_response_header(r, MHD_HTTP_HEADER_CONTENT_TYPE,
+                                "application/json") != MHD_YES ||
+        MHD_add_response_header(r, MHD_HTTP_HEADER_CACHE_CONTROL,
+                                "no-store") != MHD_YES ||
+        MHD_add_response_header(r, MHD_HTTP_HEADER_RETRY_AFTER, retry) !=
+            MHD_YES) {
+        MHD_destroy_response(r);
+        return MHD_NO;
+    }
+    ret = MHD_queue_response(conn, MHD_HTTP_SERVICE_UNAVAILABLE, r);
+    MHD_destroy_response(r);
+    return ret;
+}
+
 static enum MHD_Result serve_events(struct wsg_web *web,
                                     struct wsg_web_req *req)
 {
     struct MHD_Connection *conn = req->conn;
+    const union MHD_ConnectionInfo *ci;
+    struct sockaddr_storage peer;
+    const struct web_sub *other;
     const char *last;
     struct MHD_Response *r;
     struct web_sub *sub;
     enum MHD_Result ret;
+    size_t mine = 0;
 
+    /* Each stream holds a connection while its page is open: a few
+     * clients must not take them all (a peer), nor all the memory. */
+    memset(&peer, 0, sizeof peer);
+    ci = MHD_get_connection_info(conn, MHD_CONNECTION_INFO_CLIENT_ADDRESS);
+    if (ci && ci->client_addr)
+        memcpy(&peer, ci->client_addr,
+               ci->client_addr->sa_family == AF_INET6
+                   ? sizeof(struct sockaddr_in6)
+                   : sizeof(struct sockaddr_in));
+    for (other = web->subs; other; other = other->next)
+        mine += same_peer(&other->peer, &peer);
+    if (web->nsubs >= WSG_WEB_STREAMS_MAX)
+        return refuse_stream(conn, "too many event streams open: try again "
+                                   "later");
+    if (mine >= WSG_WEB_PEER_STREAMS_MAX)
+        return refuse_stream(conn, "too many event streams open from this "
+                                   "address: close a page, or try again "
+                                   "later");
     sub = calloc(1, sizeof *sub);
     if (!sub)
         return MHD_NO;
     sub->web = web;
     sub->conn = conn;
+    sub->peer = peer;
     sub->hup.fd = -1;
     r = MHD_create_response_from_callback(
         MHD_SIZE_UNKNOWN, WSG_WEB_LOG_EVENT_MAX, sub_read, sub, sub_free);
@@ -701,7 +976,9 @@ static enum MHD_Result serve_asset(struct wsg_web *web,
 }
 
 /* Every URL the server answers; the first match wins, and what no other
- * entry names is one of the page's files (the last entry). */
+ * entry names is one of the page's files (the last entry). Only what a
+ * route says it takes of a body is kept: a form where it reads one, an
+ * upload's bytes; any other body is dropped unread by the handlers. */
 static const struct wsg_web_route routes[] = {
     {.path = "/state.json", .methods = WSG_WEB_GET, .serve = serve_state},
     {.path = "/info.json", .methods = WSG_WEB_GET, .serve = serve_info},
@@ -710,28 +987,35 @@ static const struct wsg_web_route routes[] = {
     {.path = "/ack", .methods = WSG_WEB_POST, .serve = serve_ack},
     {.path = "/motion.json",
      .methods = WSG_WEB_POST,
+     .form = WSG_WEB_POST,
      .serve = wsg_web_serve_motion_form},
     {.path = "/graspconf.json",
      .methods = WSG_WEB_POST,
+     .form = WSG_WEB_POST,
      .serve = wsg_web_serve_graspconf},
     {.path = "/motion",
      .methods = WSG_WEB_POST,
+     .form = WSG_WEB_POST,
      .serve = wsg_web_serve_motion},
     {.path = "/settings.json",
      .methods = WSG_WEB_GET | WSG_WEB_POST,
+     .form = WSG_WEB_POST,
      .serve = wsg_web_serve_settings},
     {.path = "/scripts.json",
      .methods = WSG_WEB_GET,
      .serve = wsg_web_serve_scripts},
     {.path = "/scripts/",
      .methods = WSG_WEB_GET | WSG_WEB_PUT | WSG_WEB_DELETE,
+     .raw = WSG_WEB_PUT,
      .body_max = WSG_WEB_UPLOAD_MAX,
      .serve = wsg_web_serve_script_file},
     {.path = "/script/",
      .methods = WSG_WEB_GET | WSG_WEB_POST,
+     .form = WSG_WEB_POST,
      .serve = wsg_web_serve_script_run},
     {.path = "/control",
      .methods = WSG_WEB_POST,
+     .form = WSG_WEB_POST,
      .serve = wsg_web_serve_control},
     {.path = "/", .methods = WSG_WEB_GET, .serve = serve_asset},
 };
@@ -796,65 +1080,6 @@ static int foreign_origin(const struct wsg_web *web,
                                    web->d->opt.web.addr);
 }
 
-/* A form's fields, as MHD's post processor decodes them. */
-static enum MHD_Result on_field(void *cls, enum MHD_ValueKind kind,
-                                const char *key, const char *filename,
-                                const char *type, const char *encoding,
-                                const char *data, uint64_t off, size_t size)
-{
-    struct wsg_web_req *req = cls;
-    struct wsg_web_field *f;
-
-    (void)kind;
-    (void)filename;
-    (void)type;
-    (void)encoding;
-    /* A value may come in pieces: the next piece of the last field. */
-    if (off > 0 && req->nfields &&
-        strcmp(req->fields[req->nfields - 1].name, key) == 0)
-        f = &req->fields[req->nfields - 1];
-    else if (off == 0 && req->nfields < WSG_WEB_FIELDS_MAX &&
-             strlen(key) < WSG_WEB_NAME_MAX)
-        f = &req->fields[req->nfields++];
-    else {
-        req->overfull = 1;
-        return MHD_YES;
-    }
-    if (off == 0)
-        strcpy(f->name, key);
-    /* Its end and its NUL within the value, without a sum that could
-     * wrap. */
-    if (off >= WSG_WEB_VALUE_MAX || size >= WSG_WEB_VALUE_MAX - off) {
-        req->overfull = 1;
-        return MHD_YES;
-    }
-    memcpy(f->value + off, data, size);
-    f->value[off + size] = '\0';
-    return MHD_YES;
-}
-
-/* Decode a form body into req's fields; other bodies stay as they are. */
-static void parse_form(struct wsg_web_req *req)
-{
-    struct MHD_PostProcessor *pp;
-    const char *type;
-
-    type = MHD_lookup_connection_value(req->conn, MHD_HEADER_KIND,
-                                       MHD_HTTP_HEADER_CONTENT_TYPE);
-    if (!type ||
-        strncasecmp(type, MHD_HTTP_POST_ENCODING_FORM_URLENCODED,
-                    strlen(MHD_HTTP_POST_ENCODING_FORM_URLENCODED)) != 0)
-        return;
-    pp = MHD_create_post_processor(req->conn, 1024, on_field, req);
-    if (!pp) {
-        req->overfull = 1;
-        return;
-    }
-    if (req->body_len)
-        MHD_post_process(pp, req->body, req->body_len);
-    MHD_destroy_post_processor(pp);
-}
-
 static enum MHD_Result too_large(struct wsg_web_req *req)
 {
     char msg[64];
@@ -891,6 +1116,11 @@ static enum MHD_Result on_headers(struct wsg_web *web, struct wsg_web_req *req)
                              "server's own page (Origin http:// and its "
                              "Host) or from a client that sends no Origin");
     }
+    if (req->bad_url) {
+        req->refused = 1;
+        return wsg_web_error(req->conn, MHD_HTTP_BAD_REQUEST,
+                             "a NUL or control character in the URL");
+    }
     max = req->route->body_max ? req->route->body_max : WSG_WEB_BODY_MAX;
     clen = MHD_lookup_connection_value(req->conn, MHD_HEADER_KIND,
                                        MHD_HTTP_HEADER_CONTENT_LENGTH);
@@ -907,10 +1137,24 @@ static enum MHD_Result on_body(struct wsg_web_req *req, const char *data,
         req->route->body_max ? req->route->body_max : WSG_WEB_BODY_MAX;
     char *p;
 
-    if (req->refused)
-        return MHD_YES;          /* the rest of a refused body: dropped */
-    if (n > max - req->body_len) /* body_len <= max: no wrap */
-        return too_large(req);
+    if (req->refused || req->too_big)
+        return MHD_YES; /* the rest of a refused body: dropped */
+    if (n > max - req->body_seen) { /* body_seen <= max: no wrap */
+        /* A chunked body, whose size no header told: MHD takes an answer
+         * only before a body or after all of it (one queued now is
+         * refused, and the connection reset). So the rest is read and
+         * dropped, and 413 answered at its end; the request's deadline
+         * bounds how long that may take. */
+        req->too_big = 1;
+        free(req->body);
+        req->body = NULL;
+        req->body_len = req->body_cap = 0;
+        return MHD_YES;
+    }
+    req->body_seen += n;
+    /* A body the route does not take: not kept, never decoded. */
+    if (!((req->route->form | req->route->raw) & req->method))
+        return MHD_YES;
     if (req->body_len + n + 1 > req->body_cap) {
         size_t cap = req->body_cap ? req->body_cap * 2 : 1024;
 
@@ -928,6 +1172,50 @@ static enum MHD_Result on_body(struct wsg_web_req *req, const char *data,
     return MHD_YES;
 }
 
+/* The body of a route that takes a form: decoded when it is one (its
+ * media type, exactly), refused when it is something else. NULL to go
+ * on to the handler, else why it is refused, with its status. */
+static const char *take_form(struct wsg_web_req *req, unsigned *status)
+{
+    const char *type;
+    int r;
+
+    /* No body: the fields, if any, are in the query. */
+    if (!(req->route->form & req->method) || req->body_len == 0)
+        return NULL;
+    type = MHD_lookup_connection_value(req->conn, MHD_HEADER_KIND,
+                                       MHD_HTTP_HEADER_CONTENT_TYPE);
+    *status = MHD_HTTP_BAD_REQUEST;
+    if (!wsg_web_media_is(type, MHD_HTTP_POST_ENCODING_FORM_URLENCODED)) {
+        *status = MHD_HTTP_UNSUPPORTED_MEDIA_TYPE;
+        return "the body must be a form: Content-Type: "
+               "application/x-www-form-urlencoded";
+    }
+    r = wsg_web_form_decode(req);
+    if (r == -EILSEQ)
+        return "a NUL or control character in a form field";
+    if (r < 0) {
+        req->overfull = 1;
+        return "too many form fields, or one too long";
+    }
+    return NULL;
+}
+
+/* MHD has read a request's first line: the request starts here, its URL
+ * still as sent, before MHD decodes it (a "%00" cuts the decoded one
+ * short, unseen). What it returns is the request's *req_cls. */
+static void *on_uri(void *cls, const char *uri, struct MHD_Connection *conn)
+{
+    struct wsg_web_req *req = calloc(1, sizeof *req);
+
+    (void)cls;
+    if (!req)
+        return NULL; /* on_request closes the connection */
+    req->conn = conn;
+    req->bad_url = wsg_web_url_bad(uri ? uri : "");
+    return req;
+}
+
 /* MHD calls this once with the headers, then with each piece of the body,
  * then once more with none: the request is answered then. */
 static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn,
@@ -937,19 +1225,23 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn,
 {
     struct wsg_web *web = cls;
     struct wsg_web_req *req = *req_cls;
+    enum MHD_Result ret;
+    const char *why;
+    unsigned status;
     size_t n;
 
     (void)version;
-    if (!req) {
-        req = calloc(1, sizeof *req);
-        if (!req)
-            return MHD_NO;
-        *req_cls = req;
+    if (!req)
+        return MHD_NO; /* no memory for it (on_uri) */
+    if (!req->route) {
         req->conn = conn;
         req->url = url;
         req->method = method_of(method);
         req->route = find_route(url, &req->tail);
-        return on_headers(web, req);
+        ret = on_headers(web, req);
+        if (req->refused)
+            conn_clock(web, conn, 0); /* answered */
+        return ret;
     }
     if (*upload_size) {
         n = *upload_size;
@@ -958,16 +1250,19 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn,
     }
     if (req->refused)
         return MHD_YES;
+    /* All of it is here: answered from now on, no longer received. */
+    conn_clock(web, conn, 0);
+    if (req->too_big)
+        return too_large(req);
     if (!req->body) {
         /* An empty body still reads as "". */
         req->body = calloc(1, 1);
         if (!req->body)
             return MHD_NO;
     }
-    parse_form(req);
-    if (req->overfull)
-        return wsg_web_error(conn, MHD_HTTP_BAD_REQUEST,
-                             "too many form fields, or one too long");
+    why = take_form(req, &status);
+    if (why)
+        return wsg_web_error(conn, status, why);
     return req->route->serve(web, req);
 }
 
@@ -976,9 +1271,9 @@ static void on_completed(void *cls, struct MHD_Connection *conn,
 {
     struct wsg_web_req *req = *req_cls;
 
-    (void)cls;
-    (void)conn;
     (void)why;
+    /* Its answer is sent: the next request's clock starts. */
+    conn_clock(cls, conn, mono_ns());
     if (req)
         free(req->body);
     free(req);
@@ -1036,6 +1331,14 @@ void wsg_web_close(struct wsg_web *web)
             web->in_run = 0;
         }
         MHD_stop_daemon(web->mhd);
+    }
+    /* MHD told of each connection's close as it stopped; were one left,
+     * its clock goes with the server. */
+    while (web->conns) {
+        struct web_conn *c = web->conns;
+
+        web->conns = c->next;
+        free(c);
     }
     if (web->mhd_watch.fd >= 0)
         wsg_reactor_del(web->reactor, &web->mhd_watch);
@@ -1097,10 +1400,13 @@ int wsg_web_open(struct wsg_web **out, struct wsg_daemon *d, char *err,
     web->mhd = MHD_start_daemon(
         MHD_USE_EPOLL | MHD_ALLOW_SUSPEND_RESUME | MHD_USE_ERROR_LOG, 0, NULL,
         NULL, on_request, web, MHD_OPTION_EXTERNAL_LOGGER, on_log, NULL,
-        MHD_OPTION_LISTEN_SOCKET, fd, MHD_OPTION_CONNECTION_LIMIT,
-        (unsigned)WSG_WEB_CLIENTS_MAX, MHD_OPTION_CONNECTION_TIMEOUT,
-        (unsigned)WEB_IDLE_TIMEOUT_S, MHD_OPTION_NOTIFY_COMPLETED,
-        on_completed, NULL, MHD_OPTION_END);
+        MHD_OPTION_LISTEN_SOCKET, fd, MHD_OPTION_URI_LOG_CALLBACK, on_uri,
+        NULL, MHD_OPTION_CONNECTION_LIMIT, (unsigned)WSG_WEB_CLIENTS_MAX,
+        MHD_OPTION_CONNECTION_TIMEOUT, (unsigned)WEB_IDLE_TIMEOUT_S,
+        MHD_OPTION_NOTIFY_COMPLETED, on_completed, web,
+        MHD_OPTION_NOTIFY_CONNECTION, on_connection, web,
+        MHD_OPTION_PER_IP_CONNECTION_LIMIT, (unsigned)WSG_WEB_PEER_CLIENTS_MAX,
+        MHD_OPTION_END);
     if (!web->mhd) {
         r = -EIO;
         snprintf(err, errlen,
