@@ -687,9 +687,14 @@ static int socket_sleep(lua_State *L)
 static const luaL_Reg socket_lib[] = {
     {"gettime", socket_gettime}, {"sleep", socket_sleep}, {NULL, NULL}};
 
+/* require "socket" also makes the global socket, as a module of the Lua
+ * 5.1 era did (luaL_register): the published scripts write a bare
+ * `require "socket"` and then use the global. */
 static int open_socket(lua_State *L)
 {
     luaL_newlib(L, socket_lib);
+    lua_pushvalue(L, -1);
+    lua_setglobal(L, "socket");
     return 1;
 }
 
@@ -921,9 +926,9 @@ void wsg_script_open_api(lua_State *L, struct wsg_script *h)
     lua_setglobal(L, "grasping");
     luaL_newlib(L, finger_lib);
     lua_setglobal(L, "finger");
+    /* No math.nan: the gripper's Lua has none (a script that uses it gets
+     * nil, as on the gripper; 0/0 is a NaN). */
     lua_getglobal(L, LUA_MATHLIBNAME);
-    lua_pushnumber(L, NAN);
-    lua_setfield(L, -2, "nan");
     lua_pushcfunction(L, api_frexp);
     lua_setfield(L, -2, "frexp");
     lua_pop(L, 1);

@@ -12,10 +12,16 @@
  * - api: every function of the API (api.lua): cmd.*, mc.*, gripper.state,
  *   grasping.*, finger.* (generic fingers and --force-sensor on), bton,
  *   ntob and etob to the byte, the E_* globals against the schema, print
- *   and printf through "script output", math.nan, socket.gettime() and
+ *   and printf through "script output", no math.nan, socket.gettime() and
  *   socket.sleep in simulated time, the Lua 5.1 names, require beside the
  *   script, cmd.read and sleep inside pcall, a NaN in a motion refused
  *   with E_INVALID_PARAMETER, a normal end (D19 and D20 clear);
+ * - public: public_style.lua, written as the published scripts are (a
+ *   bare require "socket" and its global, globals from cmd.read, pcall,
+ *   printf's %d), driven as their drivers do (ack, homing, B0h, B1h):
+ *   answered, the grasping state IDLE while the script moves the fingers;
+ *   its B2h reaches ntob(math.nan), which the gripper lacks: no answer,
+ *   "Error occured", and the script goes on;
  * - ifaces: registered IDs answered over TCP, UDP and the serial port,
  *   unregistered ones E_CMD_UNKNOWN, packets the firmware refuses (too
  *   long, after 07h) never reaching the script; cmd.send answers the peer
@@ -490,7 +496,7 @@ static void api_values(struct emu_client *c, struct ctl *k)
     CHECK(nan_bits & 0x007FFFFFu);
     REQUIRE(take(c, ID_CONVERT, t, sizeof t, EMU_REPLY_MS) == 0);
     CHECK_STR(t, "3.25|false|bton: element 4 is not a byte|false|bad "
-                 "argument #1 to 'etob' (not a status code)|true|float|true");
+                 "argument #1 to 'etob' (not a status code)|true|number|true");
 
     /* E_*: every status code of the schema, with its value, and no other */
     REQUIRE(ask(c, ID_STATUSES, NULL, 0, t, sizeof t) == 0);
@@ -1802,6 +1808,76 @@ static void part_startup(const char *exe)
     CHECK_EQ(emu_stop(&e), 0);
 }
 
+/* ---- part public ---- */
+
+/* public_style.lua, written as the published scripts are (a bare require
+ * "socket" and the global it makes, globals from cmd.read, pcall around
+ * each packet, printf's %d), driven as their drivers drive them: ack,
+ * homing, B0h, B1h. Its B2h reaches ntob(math.nan), which a real gripper
+ * lacks: the packet fails inside pcall ("Error occured") and gets no
+ * answer, and the script goes on. */
+static void part_public(const char *exe)
+{
+    static const char *const args[] = {"--tcp", "127.0.0.1:0", "--control",
+                                       "127.0.0.1:0", NULL};
+    uint8_t dir = 0, move[8];
+    struct wsg_client_frame f;
+    struct emu e;
+    struct emu_client c;
+    struct ctl k;
+    const char *out;
+    int i;
+
+    REQUIRE(emu_start(&e, exe, args) == 0);
+    REQUIRE(ctl_open(&k, &e) == 0);
+    REQUIRE(emu_open(&c, &e, &emu_tcp) == 0);
+    CHECK_EQ(emu_request(&c, WSG_CMD_ACK_FAST_STOP, "ack", 3, NULL,
+                         EMU_REPLY_MS),
+             WSG_E_SUCCESS);
+    REQUIRE(emu_motion(&c, WSG_CMD_HOMING, &dir, 1, EMU_HOMING_MS, NULL) ==
+            WSG_E_SUCCESS);
+    RUN_OK(&k, "public_style.lua");
+
+    /* B0h: 19 bytes, the position at 110 mm and the script's clock from
+     * the global socket that require made. */
+    REQUIRE(emu_request(&c, 0xB0, "\0", 1, &f, EMU_REPLY_MS) == WSG_E_SUCCESS);
+    CHECK_EQ(f.len, 19);
+    if (f.len == 19) {
+        CHECK_NEAR(wsg_get_f32(EMU_PARAMS(&f) + 1), 110.0, 1e-3);
+        CHECK(wsg_get_f32(EMU_PARAMS(&f) + 13) > 0.0f);
+    }
+
+    /* B1h: a prepositioning by mc.move; the grasping state stays IDLE
+     * while the script moves the fingers and after. */
+    wsg_put_f32(move, 50.0f);
+    wsg_put_f32(move + 4, 100.0f);
+    REQUIRE(emu_request(&c, 0xB1, move, sizeof move, &f, EMU_REPLY_MS) ==
+            WSG_E_SUCCESS);
+    CHECK_EQ(f.len, 19);
+    CHECK_EQ(emu_get_grasp_state(&c), WSG_GS_IDLE);
+    for (i = 0; i < 100 && fabs(float_of(&c, WSG_CMD_GET_WIDTH) - 50.0) > 1e-3;
+         i++)
+        emu_sleep_ms(emu_ms(50));
+    CHECK_NEAR(float_of(&c, WSG_CMD_GET_WIDTH), 50.0, 1e-3);
+    CHECK_EQ(emu_get_grasp_state(&c), WSG_GS_IDLE);
+
+    /* B2h: no math.nan on the gripper, so no answer; the script runs on
+     * and answers the next packet. */
+    REQUIRE(emu_send(&c, 0xB2, NULL, 0) == 0);
+    CHECK_EQ(emu_recv_id(&c, 0xB2, &f, EMU_QUIET_MS), 0);
+    CHECK(strstr(script_status(&k), "\"running\":true") != NULL);
+    REQUIRE(emu_request(&c, 0xB0, "\0", 1, &f, EMU_REPLY_MS) == WSG_E_SUCCESS);
+    CHECK_EQ(f.len, 19);
+    out = ctl_cmd(&k, "script output");
+    CHECK(strstr(out, "#FMF fingers: 0") != NULL);
+    CHECK(strstr(out, "Error occured") != NULL);
+
+    CHECK(strcmp(ctl_cmd(&k, "script stop"), "ok script stopped") == 0);
+    emu_close(&c);
+    ctl_close(&k);
+    CHECK_EQ(emu_stop(&e), 0);
+}
+
 /* ---- part hogs ---- */
 
 /* How long a Loop may wait while a script hogs the processor: the
@@ -1944,6 +2020,10 @@ int main(int argc, char **argv)
     }
     if (all || strcmp(part, "startup") == 0) {
         part_startup(exe);
+        ran++;
+    }
+    if (all || strcmp(part, "public") == 0) {
+        part_public(exe);
         ran++;
     }
     if (all || strcmp(part, "hogs") == 0) {
