@@ -1831,9 +1831,9 @@ static void part_public(const char *exe)
     REQUIRE(emu_start(&e, exe, args) == 0);
     REQUIRE(ctl_open(&k, &e) == 0);
     REQUIRE(emu_open(&c, &e, &emu_tcp) == 0);
-    CHECK_EQ(emu_request(&c, WSG_CMD_ACK_FAST_STOP, "ack", 3, NULL,
-                         EMU_REPLY_MS),
-             WSG_E_SUCCESS);
+    CHECK_EQ(
+        emu_request(&c, WSG_CMD_ACK_FAST_STOP, "ack", 3, NULL, EMU_REPLY_MS),
+        WSG_E_SUCCESS);
     REQUIRE(emu_motion(&c, WSG_CMD_HOMING, &dir, 1, EMU_HOMING_MS, NULL) ==
             WSG_E_SUCCESS);
     RUN_OK(&k, "public_style.lua");
