@@ -379,7 +379,13 @@ run_block() { # run_block PREFIX N DOC
     fi
     # Nothing of it may still run: the next block, or the user, would
     # find its ports taken.
-    local left
+    # A process the block signalled last (kill $!) may still be on its way
+    # out: a bound of 10 s on that, not an expectation.
+    local left i=0
+    while [ -n "$(root_procs)" ] && [ $i -lt 100 ]; do
+        sleep 0.1
+        i=$((i + 1))
+    done
     left=$(for p in $(root_procs); do tr '\0' ' ' <"/proc/$p/cmdline" 2>/dev/null; echo; done | grep -v '^$')
     if [ -n "$left" ]; then
         [ -n "$bad" ] || bad="it left running: $(echo "$left" | tr '\n' ';')"
