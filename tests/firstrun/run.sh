@@ -207,9 +207,12 @@ fi
     [ -z "$SECURITY" ] || echo "deb $SECURITY $SUITE-security main"
 } >"$ROOT/etc/apt/sources.list"
 cp /etc/resolv.conf "$ROOT/etc/resolv.conf" 2>/dev/null || true
-echo firstrun >"$ROOT/etc/hostname"
-printf '127.0.0.1\tlocalhost\n127.0.1.1\tfirstrun\n::1\tlocalhost ip6-localhost ip6-loopback\n' \
-    >"$ROOT/etc/hosts"
+# The host name is the kernel's (the root shares it): the installer puts
+# it in /etc/hosts, and sudo looks it up.
+host=$(uname -n)
+echo "$host" >"$ROOT/etc/hostname"
+printf '127.0.0.1\tlocalhost\n127.0.1.1\t%s\n::1\tlocalhost ip6-localhost ip6-loopback\n' \
+    "$host" >"$ROOT/etc/hosts"
 # No service starts inside the root when a package is installed: nothing
 # would stop it, and its mounts would stay busy (what Debian's own chroots
 # and container images do).
