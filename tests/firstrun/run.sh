@@ -128,6 +128,13 @@ if ! flock -n 9; then
 fi
 
 # ---- the work directory, the mounts and their cleanup ----
+# A run killed outright (ctest's limit, SIGKILL) cannot unmount: what it
+# left mounted in a root of ours is unmounted first, before anything
+# could remove a directory with the host's /dev bound inside it.
+for stale in $(awk '$2 ~ "^/var/tmp/wsgemu-firstrun\\.[^/]*/root/" { print $2 }' /proc/self/mounts | sort -r); do
+    umount -R "$stale" 2>/dev/null || umount -R -l "$stale" 2>/dev/null ||
+        say "warning: cannot unmount $stale, left by an earlier run"
+done
 if [ $# -ge 2 ]; then
     WORK=$2
     rm -rf "$WORK" && mkdir -p "$WORK" || die "cannot make $WORK"
@@ -207,6 +214,9 @@ fi
     [ -z "$SECURITY" ] || echo "deb $SECURITY $SUITE-security main"
 } >"$ROOT/etc/apt/sources.list"
 cp /etc/resolv.conf "$ROOT/etc/resolv.conf" 2>/dev/null || true
+# A proxy this machine's apt goes through, the root's apt goes through too.
+apt-config dump 2>/dev/null | grep -i '^Acquire::https\?::Proxy ' \
+    >"$ROOT/etc/apt/apt.conf.d/01proxy" || rm -f "$ROOT/etc/apt/apt.conf.d/01proxy"
 # The host name is the kernel's (the root shares it): the installer puts
 # it in /etc/hosts, and sudo looks it up.
 host=$(uname -n)
@@ -312,15 +322,19 @@ as_user=(chroot "$ROOT" /usr/sbin/runuser -u "$USERNAME" -- /usr/bin/env -i
     PATH=/usr/local/bin:/usr/bin:/bin LANG=C.UTF-8 TERM=dumb
     /bin/bash -c 'cd "$0" && exec /bin/bash -e "$1"' "$TREE_IN")
 
-# How long a block may take (the quick start builds; deps.sh downloads): a
-# bound on a hang, not an expectation.
-BLOCK_S=${WSG_FIRSTRUN_BLOCK_S:-2400}
+# How long a block may take (the quick start builds; deps.sh downloads),
+# and all of them together: bounds on a hang, not expectations, well
+# within ctest's limit (3000 s), so that the trap always gets to unmount.
+BLOCK_S=${WSG_FIRSTRUN_BLOCK_S:-1200}
+ALL_S=${WSG_FIRSTRUN_ALL_S:-2400}
 
 failures=0
 nblocks=0
 run_block() { # run_block PREFIX N DOC
-    local body=$WORK/$1-$2.body mode rc t0 pid i name script log
+    local body=$WORK/$1-$2.body mode rc t0 pid i name script log budget
     mode=$(cat "$WORK/$1-$2.mode")
+    budget=$((ALL_S - ($(date +%s) - t_start)))
+    [ $budget -lt "$BLOCK_S" ] || budget=$BLOCK_S
     nblocks=$((nblocks + 1))
     name="$3 block $2${mode:+ ($mode)}"
     script=$WORK/block-$nblocks.sh
@@ -348,7 +362,7 @@ run_block() { # run_block PREFIX N DOC
         pid=$!
         i=0
         while ! grep -q '^ready ' "$log" && kill -0 "$pid" 2>/dev/null &&
-            [ $i -lt $((BLOCK_S * 10)) ]; do
+            [ $i -lt $((budget * 10)) ]; do
             sleep 0.1
             i=$((i + 1))
         done
@@ -367,7 +381,7 @@ run_block() { # run_block PREFIX N DOC
         wait "$pid"
         rc=$?
     else
-        timeout -s KILL "$BLOCK_S" "${as_user[@]}" \
+        timeout -s KILL "$((budget > 1 ? budget : 1))" "${as_user[@]}" \
             "/tmp/firstrun/block-$nblocks.sh" >"$log" 2>&1 </dev/null
         rc=$?
     fi
