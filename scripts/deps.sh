@@ -11,17 +11,22 @@
 #                                 (scripts/test.sh, the README's test
 #                                 command): valgrind, clang, QEMU, podman,
 #                                 Python, Chromium, ...
+#        --print (after either)   print the packages, one a line, and
+#                                 install nothing (tests/deps_list.sh)
 set -eu
 
 test_deps=0
-case "${1:-}" in
-"") ;;
---test) test_deps=1 ;;
-*)
-    echo "usage: scripts/deps.sh [--test]" >&2
-    exit 2
-    ;;
-esac
+print=0
+for a in "$@"; do
+    case $a in
+    --test) test_deps=1 ;;
+    --print) print=1 ;;
+    *)
+        echo "usage: scripts/deps.sh [--test] [--print]" >&2
+        exit 2
+        ;;
+    esac
+done
 
 # ---- building and running ----
 pkgs="cmake make gcc libc6-dev"
@@ -82,6 +87,11 @@ if [ "$test_deps" = 1 ]; then
     # fresh Debian 12 root that debootstrap builds; git clones the tree
     # into it.
     pkgs="$pkgs debootstrap git"
+fi
+
+if [ "$print" = 1 ]; then
+    printf '%s\n' $pkgs
+    exit 0
 fi
 
 missing=""

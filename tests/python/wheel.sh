@@ -23,9 +23,10 @@ fi
 src=$1
 work=$2
 . "$(dirname "$0")/../need_python.sh"
+# pip itself: scripts/wheel.sh runs Debian's (python3 -m pip wheel).
 need_python wheel.sh \
-    "python3-venv python3-pytest python3-setuptools python3-wheel" \
-    venv ensurepip pytest setuptools wheel
+    "python3-venv python3-pytest python3-setuptools python3-wheel python3-pip" \
+    venv ensurepip pytest setuptools wheel pip
 export PYTHONDONTWRITEBYTECODE=1 PIP_NO_INPUT=1 PIP_DISABLE_PIP_VERSION_CHECK=1
 
 mkdir -p "$work" || exit 1
