@@ -56,12 +56,13 @@ cleanup() {
 trap cleanup EXIT
 trap 'exit 130' INT TERM
 
-echo "$ME: static build in $BUILD"
-# Tests are not built: only the two programs go into the image.
+echo "$ME: static build of wsgemu and wsgctl in $BUILD"
+# Tests are not built: only the two programs go into the image. The
+# build's progress shows.
 cmake -S "$SRC" -B "$BUILD" -DWSG_STATIC=ON -DWSG_SANITIZE=OFF \
     -DBUILD_TESTING=OFF >/dev/null
 cmake --build "$BUILD" --parallel "$(nproc 2>/dev/null || echo 2)" \
-    --target wsgemu wsgctl >/dev/null
+    --target wsgemu wsgctl
 version=$(sed -n 's/^CMAKE_PROJECT_VERSION:STATIC=//p' "$BUILD/CMakeCache.txt")
 [ -n "$version" ] || { echo "$ME: no project version in $BUILD" >&2; exit 1; }
 [ -n "$TAG" ] || TAG=localhost/wsgemu:$version
@@ -78,7 +79,7 @@ for p in "$BUILD/wsgemu" "$BUILD/tools/wsgctl"; do
     strip "$ctx/$(basename "$p")"
 done
 
-echo "$ME: podman build $TAG (wsgemu $version)"
+echo "$ME: podman build $TAG (wsgemu $version), from the two programs alone"
 tags=(--tag "$TAG")
 case $TAG in
 *:"$version") tags+=(--tag "${TAG%:*}:latest") ;;
@@ -88,12 +89,14 @@ esac
 echo "$ME: built $TAG"
 
 if [ -n "$SAVE" ]; then
+    echo "$ME: podman save $TAG to $SAVE"
     "$PODMAN" save --quiet --format docker-archive --output "$SAVE" "$TAG"
     echo "$ME: saved $TAG to $SAVE"
 fi
 if [ -n "$EXPORT" ]; then
     # A created (never started) container: creating it runs nothing, so
     # this works where the runtime refuses to start containers.
+    echo "$ME: podman export $TAG to $EXPORT"
     ctr=$("$PODMAN" create "$TAG")
     mkdir -p "$EXPORT"
     "$PODMAN" export "$ctr" | tar -x -C "$EXPORT"

@@ -1,7 +1,9 @@
 #!/bin/sh
 # Installs the Debian packages wsgemu needs, and only those that are
 # missing, so it is quick and offline-safe on a prepared machine. Runs
-# apt-get as root, or through sudo when not root.
+# apt-get as root, or through sudo when not root. Says what it installs
+# and how much it downloads before it starts, and apt-get shows each
+# download and each package it sets up as it goes.
 #
 # Usage: scripts/deps.sh          what building and running needs (the
 #                                 README's quick start)
@@ -9,17 +11,22 @@
 #                                 (scripts/test.sh, the README's test
 #                                 command): valgrind, clang, QEMU, podman,
 #                                 Python, Chromium, ...
+#        --print (after either)   print the packages, one a line, and
+#                                 install nothing (tests/deps_list.sh)
 set -eu
 
 test_deps=0
-case "${1:-}" in
-"") ;;
---test) test_deps=1 ;;
-*)
-    echo "usage: scripts/deps.sh [--test]" >&2
-    exit 2
-    ;;
-esac
+print=0
+for a in "$@"; do
+    case $a in
+    --test) test_deps=1 ;;
+    --print) print=1 ;;
+    *)
+        echo "usage: scripts/deps.sh [--test] [--print]" >&2
+        exit 2
+        ;;
+    esac
+done
 
 # ---- building and running ----
 pkgs="cmake make gcc libc6-dev"
@@ -29,6 +36,9 @@ pkgs="$pkgs pkgconf liblua5.4-dev"
 # pkg-config; its -dev package brings GnuTLS's headers, which the static
 # stand-in for GnuTLS is checked against (src/daemon/web/gnutls_none.c).
 pkgs="$pkgs libmicrohttpd-dev"
+# setcap, for an ordinary user who wants the real gripper's port 1000
+# (README: Port 1000): `sudo setcap cap_net_bind_service=+ep build/wsgemu`.
+pkgs="$pkgs libcap2-bin"
 
 # ---- the test suite ----
 if [ "$test_deps" = 1 ]; then
@@ -54,6 +64,9 @@ if [ "$test_deps" = 1 ]; then
     # `pip install --no-build-isolation ./python` needs no package index; the
     # python_mypy test checks the package with Debian's mypy (--strict).
     pkgs="$pkgs python3-setuptools python3-wheel python3-mypy"
+    # scripts/wheel.sh (the python_wheel test) builds the wheel with
+    # Debian's own pip (`/usr/bin/python3 -m pip wheel`), not a venv's.
+    pkgs="$pkgs python3-pip"
     # The web page's browser tests (tests/browser/run.sh): Debian's Chromium,
     # headless, driven through WebDriver by chromium-driver and Debian's
     # python3-selenium.
@@ -72,6 +85,15 @@ if [ "$test_deps" = 1 ]; then
     if [ "$(dpkg --print-architecture)" = amd64 ]; then
         pkgs="$pkgs qemu-system-x86 xz-utils iproute2"
     fi
+    # The firstrun test (tests/firstrun/run.sh) follows the README in a
+    # fresh Debian 12 root that debootstrap builds; git clones the tree
+    # into it.
+    pkgs="$pkgs debootstrap git"
+fi
+
+if [ "$print" = 1 ]; then
+    printf '%s\n' $pkgs
+    exit 0
 fi
 
 missing=""
@@ -91,8 +113,19 @@ else
     echo "deps.sh: need root (or sudo) to install:$missing" >&2
     exit 1
 fi
-echo "deps.sh: installing$missing" >&2
-$sudo apt-get update -qq
+echo "deps.sh: missing:$missing" >&2
+echo "deps.sh: apt-get update (the package lists)" >&2
+$sudo apt-get update -q
+# What apt-get will fetch and install, with what they pull in, before it
+# does: the count, the download and the disk space.
 # shellcheck disable=SC2086
-DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq \
-    --no-install-recommends $missing
+LC_ALL=C $sudo apt-get install --no-install-recommends --assume-no \
+    $missing 2>/dev/null |
+    sed -n 's/^\([0-9][0-9]* upgraded, .*\)/deps.sh: \1/p
+            s/^Need to get \(.*\)/deps.sh: to download: \1/p
+            s/^After this operation, \(.*\)/deps.sh: \1/p' >&2 || true
+echo "deps.sh: apt-get install (each download, then each package set up)" >&2
+# shellcheck disable=SC2086
+DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -q \
+    -o Dpkg::Use-Pty=0 --no-install-recommends $missing
+echo "deps.sh: done" >&2

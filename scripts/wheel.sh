@@ -11,7 +11,8 @@
 # Usage: scripts/wheel.sh [--build-dir DIR] [--out DIR]
 #   --build-dir DIR  the static build tree (default build-static)
 #   --out DIR        where the wheel goes (default DIR of --build-dir/wheel)
-# Prints the wheel's path. Run scripts/deps.sh --test first.
+# Prints the wheel's path on stdout, and what it does as it goes (the
+# build's progress among it) on stderr. Run scripts/deps.sh --test first.
 set -eu
 
 ME=wheel.sh
@@ -30,11 +31,13 @@ while [ $# -gt 0 ]; do
 done
 [ -n "$OUT" ] || OUT=$BUILD/wheel
 
-# Only the two programs: tests are not built.
+# Only the two programs: tests are not built. stdout is the wheel's path
+# alone: the rest goes to stderr.
+echo "$ME: static build of wsgemu and wsgctl in $BUILD" >&2
 cmake -S "$SRC" -B "$BUILD" -DWSG_STATIC=ON -DWSG_SANITIZE=OFF \
     -DBUILD_TESTING=OFF >/dev/null
 cmake --build "$BUILD" --parallel "$(nproc 2>/dev/null || echo 2)" \
-    --target wsgemu wsgctl >/dev/null
+    --target wsgemu wsgctl >&2
 
 stage=$BUILD/wheel-src
 rm -rf "$stage" && mkdir -p "$stage/wsgemu/bin"
@@ -54,6 +57,7 @@ done
 plat=$("$PY" -c 'import sysconfig; print(sysconfig.get_platform().replace("-", "_").replace(".", "_"))')
 mkdir -p "$OUT"
 rm -f "$OUT"/wsgemu-*-"$plat".whl
+echo "$ME: pip wheel (Debian's setuptools, no index) into $OUT" >&2
 PIP_DISABLE_PIP_VERSION_CHECK=1 PIP_NO_INPUT=1 \
     "$PY" -m pip wheel --quiet --no-deps --no-index --no-build-isolation \
     --config-settings=--build-option=--plat-name="$plat" -w "$OUT" "$stage"

@@ -1,13 +1,15 @@
 #!/bin/sh
-# options_docs.sh LIST SOURCE_DIR: every option of the daemon's settings
-# table (LIST is options_list, which prints it) is in the man page's
-# OPTIONS (a .TP tag), in the README's options table (its first column),
-# and, if it is a config-file key (but a negation such as no-crc), in the
-# example config (as "key = " or "#key = "); and none of the three names
-# an option the table does not have.
+# options_docs.sh LIST SOURCE_DIR [WSGEMU]: every option of the daemon's
+# settings table (LIST is options_list, which prints it) is in the man
+# page's OPTIONS (a .TP tag), in the README's options table (its first
+# column), and, if it is a config-file key (but a negation such as
+# no-crc), in the example config (as "key = " or "#key = "); and none of
+# the three names an option the table does not have. With WSGEMU, its
+# --help too: every option, and each section heading once.
 set -u
 list=$1
 src=$2
+wsgemu=${3:-}
 tmp=$(mktemp -d "${TMPDIR:-/tmp}/wsgemu-options-docs.XXXXXX") || exit 1
 trap 'rm -rf "$tmp"' EXIT
 status=0
@@ -49,7 +51,22 @@ compare() {
     fi
     [ -n "$missing$extra" ] || echo "ok: $1: $(wc -l <"$3") settings"
 }
+# --help: the options at the start of its lines ("  --name", and the
+# negations after a comma), and its headings (lines that start with a
+# capital and end with a colon), none of them twice.
+if [ -n "$wsgemu" ]; then
+    "$wsgemu" --help >"$tmp/help.txt" || { echo "FAIL: $wsgemu --help"; exit 1; }
+    grep -- '^  -' "$tmp/help.txt" | sed 's/^  //; s/  .*//' |
+        grep -o -- '--[a-z][a-z0-9-]*' | sed 's/^--//' | sort -u >"$tmp/help"
+    dup=$(grep '^[A-Z].*:$' "$tmp/help.txt" | sort | uniq -d)
+    if [ -n "$dup" ]; then
+        echo "FAIL: wsgemu --help repeats the heading(s): $dup"
+        status=1
+    fi
+fi
+
 compare "docs/man/wsgemu.1 OPTIONS" "$tmp/all" "$tmp/man"
 compare "README.md's options table" "$tmp/all" "$tmp/readme"
 compare "packaging/wsgemu.conf" "$tmp/keys" "$tmp/example"
+[ -z "$wsgemu" ] || compare "wsgemu --help" "$tmp/all" "$tmp/help"
 exit $status

@@ -92,7 +92,7 @@ static int open_transport(struct wsg_gripper *g,
                           const struct wsg_transport_env *env, const void *cfg)
 {
     struct wsg_transport *t = &g->transports[g->ntransports];
-    char err[512];
+    char err[WSG_TRANSPORT_ERR_MAX];
     int r;
 
     memset(t, 0, sizeof *t);
@@ -382,7 +382,7 @@ int wsg_daemon_open(struct wsg_daemon *d)
             return r;
     }
     if (d->opt.control_enabled) {
-        char err[512];
+        char err[WSG_TRANSPORT_ERR_MAX];
 
         /* Last but the web page: the ready line ends with control= and
          * web=. */
@@ -394,7 +394,7 @@ int wsg_daemon_open(struct wsg_daemon *d)
         }
     }
     if (d->opt.web_enabled) {
-        char err[512];
+        char err[WSG_TRANSPORT_ERR_MAX];
 
         r = wsg_web_open(&d->web, d, err, sizeof err);
         if (r < 0) {

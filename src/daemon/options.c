@@ -1043,22 +1043,20 @@ static void usage_setting(FILE *f, const struct wsg_setting *s)
 
 static void usage(FILE *f)
 {
-    int section = -1;
-    size_t i;
+    size_t section, i;
 
     fputs("Usage: wsgemu [OPTION]...\n"
           "Emulate a Weiss WSG 50 gripper on its host interfaces.\n",
           f);
-    for (i = 0; i < WSG_SETTINGS_N; i++) {
-        const struct wsg_setting *s = &settings[i];
-
-        if (!s->help)
-            continue;
-        if ((int)s->section != section) {
-            section = (int)s->section;
-            fprintf(f, "\n%s:\n", section_names[section]);
-        }
-        usage_setting(f, s);
+    /* Section by section: the table keeps a later setting next to its
+     * kin (--text-interface after the gripper's), not in its section's
+     * run, and each heading is printed once. */
+    for (section = 0; section < sizeof section_names / sizeof *section_names;
+         section++) {
+        fprintf(f, "\n%s:\n", section_names[section]);
+        for (i = 0; i < WSG_SETTINGS_N; i++)
+            if (settings[i].help && (size_t)settings[i].section == section)
+                usage_setting(f, &settings[i]);
     }
     fputs("\n"
           "Config file: one 'key = value' per line, the keys the long option\n"

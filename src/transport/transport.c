@@ -65,12 +65,34 @@ void wsg_transport_listen_error(char *buf, size_t len, const char *proto,
                                 const char *where, uint16_t port,
                                 const char *step, int err)
 {
-    if (err == -EACCES && port < 1024 && !step)
+    char self[256];
+    ssize_t n;
+
+    /* The commonest first-run failure: the defaults' TCP port 1000 (and
+     * the web page's 80) for an ordinary user. Every way out is named,
+     * with this program's own path for setcap, which a rebuild undoes. */
+    if (err == -EACCES && port < 1024 && !step) {
+        n = readlink("/proc/self/exe", self, sizeof self - 1);
+        if (n <= 0 || (size_t)n >= sizeof self - 1)
+            strcpy(self, "PROGRAM");
+        else
+            self[n] = '\0';
         snprintf(buf, len,
-                 "cannot listen on %s %s: %s (ports below 1024 need root or "
-                 "CAP_NET_BIND_SERVICE; --%s 127.0.0.1:PORT picks another)",
-                 proto, where, strerror(-err), proto);
-    else if (!step)
+                 "cannot listen on %s %s: %s: ports below 1024 need root or "
+                 "CAP_NET_BIND_SERVICE.\n"
+                 "  As an ordinary user give --%s 127.0.0.1:PORT%s with a "
+                 "PORT from 1024 up (0: a free one).\n"
+                 "  For port %u itself run it as root (sudo), or let this "
+                 "program bind low ports:\n"
+                 "    sudo setcap cap_net_bind_service=+ep %s\n"
+                 "  (setcap is in Debian's libcap2-bin; a rebuild drops the "
+                 "capability), or run the\n"
+                 "  container image or the Debian package's wsgemu service "
+                 "(README: Port 1000).",
+                 proto, where, strerror(-err), proto,
+                 strcmp(proto, "udp") == 0 ? ":REMOTE" : "", (unsigned)port,
+                 self);
+    } else if (!step)
         snprintf(buf, len, "cannot listen on %s %s: %s", proto, where,
                  strerror(-err));
     else

@@ -163,7 +163,9 @@ int wsg_transport_listen_tcp(const struct wsg_endpoint *ep, int backlog,
 
 /* The message for a socket that cannot listen on ADDR:PORT: the reason,
  * the step that failed when it is not the bind (step NULL), and for a port
- * below 1024 refused with EACCES, what to do about it. err is -errno. */
+ * below 1024 refused with EACCES, what to do about it, over several lines
+ * (WSG_TRANSPORT_ERR_MAX holds it). err is -errno. */
+#define WSG_TRANSPORT_ERR_MAX 1024
 void wsg_transport_listen_error(char *buf, size_t len, const char *proto,
                                 const char *where, uint16_t port,
                                 const char *step, int err);

@@ -112,6 +112,12 @@ mapfile -t CMD < <(podman image inspect \
     sed '/^$/d')
 [ "${#ENTRY[@]}" -ge 1 ] || fail "the image has no ENTRYPOINT"
 echo "$ME: image entrypoint: ${ENTRY[*]} ${CMD[*]}"
+# The documents give the default arguments as the image has them: the
+# README and docs/container.md, each with every one of them, in order.
+for doc in README.md docs/container.md; do
+    tr '\n' ' ' <"$SRC/$doc" | tr -s ' ' | grep -qF -- "${CMD[*]}" ||
+        fail "$doc does not give the image's default arguments: ${CMD[*]}"
+done
 for f in wsgemu wsgctl; do
     [ -x "$T/rootfs/usr/bin/$f" ] || fail "the image has no /usr/bin/$f"
     if readelf -lW "$T/rootfs/usr/bin/$f" | grep -q INTERP; then
@@ -287,6 +293,11 @@ if [ "$MODE" != run ]; then
     PID=$!
     READY=$(wait_ready "$T/rootfs.out" "$PID") || fail "the entrypoint did not start"
     echo "  $READY"
+    # The ready line of the default arguments, as the documents show it.
+    for doc in README.md docs/container.md; do
+        grep -qF -- "# $READY" "$SRC/$doc" ||
+            fail "$doc does not show the default ready line: $READY"
+    done
     WEB=1 talk "$PID" nsenter --net="/proc/$PID/ns/net" chroot "$T/rootfs" /usr/bin/wsgctl
     kill -TERM "$PID"
     st=0

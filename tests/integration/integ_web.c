@@ -16,9 +16,9 @@
  * - a NUL or control character decoded from a form's name or value, or
  *   the URL's path or query, is 400 (line=part+25%00 sets no part,
  *   /state.json%00.txt is not /state.json);
- * - GET /state.json is the control channel's state byte for byte (time
- *   paused, so the two cannot differ in time); GET /info.json has the
- *   model's stroke and every flag's name by bit;
+ * - GET /state.json is the control channel's state byte for byte, ended
+ *   by a newline (time paused, so the two cannot differ in time); GET
+ *   /info.json has the model's stroke and every flag's name by bit;
  * - /events: a state event at once; then, with nothing happening, none,
  *   and the daemon does not wake (the scheduler's "wakes" stays, no
  *   context switches to speak of) for 2 s with the stream open;
@@ -186,8 +186,13 @@ static void test_state(struct ctl *k)
     CHECK(http_header(&ans, "Content-Type", v, sizeof v) &&
           strcmp(v, "application/json") == 0);
     js = ctl_cmd(k, "state");
-    CHECK(strncmp(js, "ok ", 3) == 0 && strcmp(js + 3, ans.body) == 0);
-    if (strncmp(js, "ok ", 3) != 0 || strcmp(js + 3, ans.body) != 0)
+    /* The channel's object, ended by a newline as its line is. */
+    CHECK(strncmp(js, "ok ", 3) == 0 &&
+          strlen(ans.body) == strlen(js + 3) + 1 &&
+          strncmp(js + 3, ans.body, strlen(js + 3)) == 0 &&
+          ans.body[strlen(js + 3)] == '\n');
+    if (strncmp(js, "ok ", 3) != 0 || strlen(ans.body) != strlen(js + 3) + 1 ||
+        strncmp(js + 3, ans.body, strlen(js + 3)) != 0)
         fprintf(stderr, "control: %s\nweb:     %s\n", js, ans.body);
     CMD_OK(k, "time resume");
 

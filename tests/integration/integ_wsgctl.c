@@ -5,7 +5,9 @@
  *
  * The daemon serves TCP, UDP and (where there are pseudo-terminals) a pty
  * at once, so one gripper sees every interface:
- * - --help, usage errors (exit 2), no emulator listening (exit 3);
+ * - --help, usage errors (exit 2), no command (a short usage pointing
+ *   to --help), no emulator listening (exit 3, saying what to check:
+ *   wsgemu running, the address, WSG_HOST/WSG_PORT without --tcp);
  * - over TCP: home then width, move, grasp with no part (exit 1,
  *   E_CMD_FAILED on stderr), release, state, info, raw with bytes, a float
  *   and a string, raw with an unknown ID, watch --count, watch ended by
@@ -183,7 +185,10 @@ static void test_usage(struct env *v)
     CHECK_EQ(ctl(v, NULL, NULL, "--help", (char *)NULL), 0);
     CHECK(has(v->out, "watch") && has(v->out, "raw") &&
           has(v->out, "decode") && has(v->out, "Exit status"));
+    /* No command: a short usage that points to --help, not all of it. */
     CHECK_EQ(ctl(v, NULL, NULL, (char *)NULL), 2);
+    CHECK(has(v->err, "usage: wsgctl") && has(v->err, "wsgctl --help"));
+    CHECK(count_lines(v->err) <= 8);
     CHECK_EQ(TCP(v, "frobnicate"), 2);
     CHECK(has(v->err, "unknown command"));
     CHECK_EQ(TCP(v, "move", "10"), 2);
@@ -208,6 +213,15 @@ static void test_no_emulator(struct env *v)
     snprintf(addr, sizeof addr, "127.0.0.1:%u", free_port(SOCK_STREAM));
     CHECK_EQ(ctl(v, "--tcp", addr, "width", (char *)NULL), 3);
     CHECK(has(v->err, "connect"));
+    /* What to check is said, not only the reason: is wsgemu running, and
+     * where wsgctl looked. Without --tcp the address came from WSG_HOST
+     * and WSG_PORT (or their defaults), and that is said too. */
+    CHECK(has(v->err, "is wsgemu") && has(v->err, "ready line"));
+    setenv("WSG_PORT", addr + strlen("127.0.0.1:"), 1);
+    CHECK_EQ(ctl(v, NULL, NULL, "width", (char *)NULL), 3);
+    unsetenv("WSG_PORT");
+    CHECK(has(v->err, addr) && has(v->err, "is wsgemu") &&
+          has(v->err, "WSG_HOST") && has(v->err, "WSG_PORT"));
     /* UDP has no connection: the missing answer is the error. */
     snprintf(addr, sizeof addr, "127.0.0.1:%u:%u", free_port(SOCK_DGRAM),
              free_port(SOCK_DGRAM));

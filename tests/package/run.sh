@@ -391,6 +391,18 @@ while read -r d; do
 done <<EOF
 $(echo "$deps" | tr ',' '\n')
 EOF
+# The README says what the package depends on: each of Depends, in the
+# form dpkg-deb shows it, in its Debian package section.
+check "README.md's Debian package section names each of Depends"
+awk '/^### / { on = ($0 == "### The Debian package") } on' "$SRC/README.md" |
+    tr '\n' ' ' | tr -s ' ' >"$S/readme-deb"
+while read -r d; do
+    [ -n "$d" ] || continue
+    grep -qF -- "\`$d\`" "$S/readme-deb" ||
+        fail "README.md's Debian package section does not name \`$d\` (Depends: $deps)"
+done <<EOF
+$(echo "$deps" | tr ',' '\n' | sed 's/^ *//')
+EOF
 check "conffiles: /etc/wsgemu/wsgemu.conf, /etc/logrotate.d/wsgemu"
 dpkg-deb -I "$DEB" conffiles >"$S/conffiles" 2>&1 ||
     { show "$S/conffiles"; fail "the package has no conffiles"; }

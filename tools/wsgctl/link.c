@@ -45,9 +45,39 @@ static int resolve(const char *host, unsigned long port, int socktype,
     return 0;
 }
 
-static int open_tcp(struct conn *c, const char *addr, double timeout_s,
-                    int probe)
+/* What to check when nothing listens where wsgctl looked: most often no
+ * emulator runs, or it runs on another port than the one wsgctl took from
+ * its defaults. Said in the same line as the failure, so --json's error
+ * carries it too. */
+static const char *connect_hint(const struct opts *o, int r)
 {
+    static char buf[320];
+
+    if (r != -ECONNREFUSED && r != -ETIMEDOUT && r != -EHOSTUNREACH &&
+        r != -ENETUNREACH)
+        return "";
+    if (o->kind == LINK_CONTROL)
+        return o->addr_given ? " (is wsgemu running with --control at that "
+                               "address?)"
+                             : " (is wsgemu running with --control at that "
+                               "address? It came from WSG_CONTROL)";
+    if (o->addr_given)
+        return " (is wsgemu, or the gripper, running and serving TCP at that "
+               "address? wsgemu's ready line shows its tcp=ADDR:PORT)";
+    snprintf(buf, sizeof buf,
+             " (is wsgemu, or the gripper, running and serving TCP at that "
+             "address? Without --tcp wsgctl connects to $WSG_HOST:$WSG_PORT, "
+             "default %s:%d: give --tcp HOST:PORT or set WSG_HOST and "
+             "WSG_PORT to the tcp= of wsgemu's ready line)",
+             DEFAULT_HOST, DEFAULT_PORT);
+    return buf;
+}
+
+static int open_tcp(struct conn *c, const struct opts *o)
+{
+    const char *addr = o->addr;
+    double timeout_s = o->timeout_s;
+    int probe = o->probe;
     char host[256];
     unsigned long port;
     struct sockaddr_in sa;
@@ -62,8 +92,9 @@ static int open_tcp(struct conn *c, const char *addr, double timeout_s,
     r = wsg_client_open_tcp(&c->l, &sa, (int)(timeout_s * 1000));
     if (r < 0) {
         if (!probe)
-            err("connect to %s: %s", addr,
-                r == -ETIMEDOUT ? "timed out" : strerror(-r));
+            err("connect to %s: %s%s", addr,
+                r == -ETIMEDOUT ? "timed out" : strerror(-r),
+                connect_hint(o, r));
         return -EXIT_CONN;
     }
     return 0;
@@ -133,13 +164,13 @@ int conn_open(struct conn *c, const struct opts *o)
     c->l.on_bad = warn_bad;
     switch (o->kind) {
     case LINK_TCP:
-        return open_tcp(c, o->addr, o->timeout_s, o->probe);
+        return open_tcp(c, o);
     case LINK_UDP:
         return open_udp(c, o->addr);
     case LINK_SERIAL:
         return open_serial(c, o->addr, o->probe);
     case LINK_CONTROL:
-        return open_tcp(c, o->addr, o->timeout_s, o->probe);
+        return open_tcp(c, o);
     }
     return -EXIT_USAGE;
 }

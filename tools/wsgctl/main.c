@@ -703,7 +703,19 @@ int main(int argc, char **argv)
     if (rc)
         goto out;
     if (npos == 0) {
-        usage(stderr);
+        /* Not the whole of --help (some 230 lines): the form, where it
+         * connects, the commands a first try wants and where the rest is. */
+        fprintf(stderr,
+                "usage: wsgctl [--tcp HOST:PORT | --udp HOST:PORT[:LOCAL] | "
+                "--serial PATH |\n"
+                "               --control HOST:PORT] [OPTIONS] COMMAND "
+                "[ARGS]\n"
+                "Without an interface option: --tcp $WSG_HOST:$WSG_PORT "
+                "(default %s:%d).\n"
+                "To start with: wait-ready, home, width, state, move WIDTH "
+                "SPEED, info.\n"
+                "wsgctl --help lists every command and option.\n",
+                DEFAULT_HOST, DEFAULT_PORT);
         rc = EXIT_USAGE;
         goto out;
     }

@@ -742,6 +742,10 @@ static enum MHD_Result serve_state(struct wsg_web *web,
     len =
         wsg_state_format(json, sizeof json, web->g, web->sched, WSG_STATE_ALL);
     wsg_web_done(web);
+    /* A line, as the control channel's: `curl .../state.json` in a
+     * terminal leaves the prompt on a line of its own. */
+    if (len + 1 < sizeof json)
+        json[len++] = '\n';
     return wsg_web_answer(req->conn, MHD_HTTP_OK, "application/json", json,
                           len, 0);
 }
