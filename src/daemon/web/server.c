@@ -517,9 +517,12 @@ static void on_connection(void *cls, struct MHD_Connection *conn,
 
 /* ---- answers ---- */
 
-enum MHD_Result wsg_web_answer(struct MHD_Connection *conn, unsigned status,
-                               const char *type, const void *body, size_t len,
-                               int is_static)
+/* An answer with the headers every answer has, and one more (name NULL:
+ * none). */
+static enum MHD_Result answer_with(struct MHD_Connection *conn,
+                                   unsigned status, const char *type,
+                                   const void *body, size_t len, int is_static,
+                                   const char *name, const char *value)
 {
     struct MHD_Response *r;
     enum MHD_Result ret;
@@ -539,13 +542,21 @@ enum MHD_Result wsg_web_answer(struct MHD_Connection *conn, unsigned status,
                                 is_static ? "no-cache" : "no-store") !=
             MHD_YES ||
         MHD_add_response_header(r, "X-Content-Type-Options", "nosniff") !=
-            MHD_YES) {
+            MHD_YES ||
+        (name && MHD_add_response_header(r, name, value) != MHD_YES)) {
         MHD_destroy_response(r);
         return MHD_NO;
     }
     ret = MHD_queue_response(conn, status, r);
     MHD_destroy_response(r);
     return ret;
+}
+
+enum MHD_Result wsg_web_answer(struct MHD_Connection *conn, unsigned status,
+                               const char *type, const void *body, size_t len,
+                               int is_static)
+{
+    return answer_with(conn, status, type, body, len, is_static, NULL, NULL);
 }
 
 enum MHD_Result wsg_web_json(struct MHD_Connection *conn, unsigned status,
@@ -821,28 +832,14 @@ static enum MHD_Result refuse_stream(struct MHD_Connection *conn,
                                      const char *why)
 {
     char body[WSG_WEB_ANSWER_MAX], retry[16];
-    struct MHD_Response *r;
-    enum MHD_Result ret;
     int n;
 
     n = snprintf(body, sizeof body, "{\"error\":\"%s\"}", why);
+    if (n < 0 || (size_t)n >= sizeof body)
+        return MHD_NO;
     snprintf(retry, sizeof retry, "%u", WSG_WEB_RETRY_AFTER_S);
-    r = MHD_create_response_from_buffer((size_t)n, body,
-                                        MHD_RESPMEM_MUST_COPY);
-    if (!r)
-        return MHD_NO;
-    if (MHD_add_response_header(r, MHD_HTTP_HEADER_CONTENT_TYPE,
-                                "application/json") != MHD_YES ||
-        MHD_add_response_header(r, MHD_HTTP_HEADER_CACHE_CONTROL,
-                                "no-store") != MHD_YES ||
-        MHD_add_response_header(r, MHD_HTTP_HEADER_RETRY_AFTER, retry) !=
-            MHD_YES) {
-        MHD_destroy_response(r);
-        return MHD_NO;
-    }
-    ret = MHD_queue_response(conn, MHD_HTTP_SERVICE_UNAVAILABLE, r);
-    MHD_destroy_response(r);
-    return ret;
+    return answer_with(conn, MHD_HTTP_SERVICE_UNAVAILABLE, "application/json",
+                       body, (size_t)n, 0, MHD_HTTP_HEADER_RETRY_AFTER, retry);
 }
 
 static enum MHD_Result serve_events(struct wsg_web *web,
@@ -1142,7 +1139,7 @@ static enum MHD_Result on_body(struct wsg_web_req *req, const char *data,
     char *p;
 
     if (req->refused || req->too_big)
-        return MHD_YES; /* the rest of a refused body: dropped */
+        return MHD_YES;             /* the rest of a refused body: dropped */
     if (n > max - req->body_seen) { /* body_seen <= max: no wrap */
         /* A chunked body, whose size no header told: MHD takes an answer
          * only before a body or after all of it (one queued now is
