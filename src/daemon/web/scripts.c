@@ -270,7 +270,7 @@ static enum MHD_Result file_get(struct wsg_web_req *req, int dfd,
 static int dir_usage(int dfd, const char *name, unsigned long *count,
                      unsigned long long *bytes)
 {
-    char why[128];
+    char why[512]; /* file_stat's reason, with a name of up to 255 bytes */
     struct dirent *de;
     struct stat st;
     DIR *dir;
