@@ -215,6 +215,21 @@ static void test_grasp_hold(void)
     CHECK(wsg_device_idle(&t.dev));
     tdev_steps(&t, 100);
     CHECK_NEAR(tdev_axis(&t)->width, 36.0, 1e-9);
+    /* each pad feels the grip force over the part's patch, centred */
+    {
+        struct wsg_contact c;
+        CHECK_EQ(wsg_axis_contact(tdev_axis(&t), 0, &c), 0);
+        CHECK_NEAR(c.force, 40.0, 1e-3);
+        CHECK_NEAR(c.w, WSG_AXIS_PATCH_MM, 1e-9);
+        CHECK_NEAR(c.h, WSG_AXIS_PATCH_MM, 1e-9);
+        CHECK_NEAR(c.x, 0.0, 1e-9);
+        wsg_axis_set_part_patch(tdev_axis(&t), 4.0, 8.0);
+        CHECK_EQ(wsg_axis_contact(tdev_axis(&t), 1, &c), 0);
+        CHECK_NEAR(c.force, 40.0, 1e-3);
+        CHECK_NEAR(c.w, 4.0, 1e-9);
+        CHECK_NEAR(c.h, 8.0, 1e-9);
+        CHECK_EQ(wsg_axis_contact(tdev_axis(&t), 2, &c), -EINVAL);
+    }
 
     /* the part is removed: lost, the fingers close through the clamping
      * travel, statistics count it */
@@ -223,6 +238,12 @@ static void test_grasp_hold(void)
     tdev_steps(&t, 1);
     CHECK_EQ(tdev_grasp_state(&t), WSG_GS_PART_LOST);
     CHECK(tdev_flags(&t) & WSG_SF_MOVING);
+    {
+        struct wsg_contact c;
+        CHECK_EQ(wsg_axis_contact(tdev_axis(&t), 0, &c), 0);
+        CHECK_EQ(c.force, 0.0); /* nothing touches the pads */
+        CHECK_EQ(c.w, 0.0);
+    }
     CHECK(!(tdev_flags(&t) & WSG_SF_BLOCKED_MINUS));
     tdev_steps(&t, 2000);
     CHECK_NEAR(tdev_axis(&t)->width, 30.0, 1e-9); /* 40 - 10 mm travel */

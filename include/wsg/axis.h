@@ -99,7 +99,7 @@ struct wsg_axis;
  * that this is aligned for it; the words' types are those the struct
  * holds. Only the model reads or writes it, through a struct wsg_axis *
  * to it. */
-#define WSG_AXIS_STORAGE_WORDS 102
+#define WSG_AXIS_STORAGE_WORDS 104
 struct wsg_axis_storage {
     union {
         double d;
@@ -221,6 +221,19 @@ int wsg_axis_soft_limits(const struct wsg_axis *ax, double *minus,
 /* 1 with its width and stiffness when a part is placed, else 0 with both
  * untouched. */
 int wsg_axis_part(const struct wsg_axis *ax, double *width, double *stiffness);
+/* What one finger's pad feels, for the sensors a finger carries (an FMF's
+ * force, a DSA pad's cells): force in N pressing on the pad, and the patch
+ * of the pad the part touches, its centre (x across the pad, y along the
+ * finger, in mm from the pad's centre) and size (w by h mm). All 0 when
+ * nothing touches the pad. */
+struct wsg_contact {
+    double force;
+    double x, y;
+    double w, h;
+};
+/* finger 0 or 1: 0 with *c filled, else -EINVAL with *c untouched. */
+int wsg_axis_contact(const struct wsg_axis *ax, int finger,
+                     struct wsg_contact *c);
 
 /* Requests. The motion requests validate against the current state and
  * return the immediate status (E_CMD_PENDING when accepted); speeds and
@@ -285,6 +298,10 @@ void wsg_axis_advance_idle(struct wsg_axis *ax, uint64_t nsteps);
 
 /* The world (control channel, tests). width < 0 removes the part. */
 void wsg_axis_set_part(struct wsg_axis *ax, double width, double stiffness);
+/* The size of the patch the part presses on each pad, w by h mm, centred
+ * (default WSG_AXIS_PATCH_MM square); values <= 0 or NaN restore it. */
+#define WSG_AXIS_PATCH_MM 10.0
+void wsg_axis_set_part_patch(struct wsg_axis *ax, double w, double h);
 /* A rigid obstacle that blocks the fingers at width, moving either way;
  * width < 0 removes it. */
 void wsg_axis_set_obstacle(struct wsg_axis *ax, double width);

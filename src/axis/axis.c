@@ -1186,6 +1186,23 @@ int wsg_axis_part(const struct wsg_axis *ax, double *width, double *stiffness)
     return 1;
 }
 
+int wsg_axis_contact(const struct wsg_axis *ax, int finger,
+                     struct wsg_contact *c)
+{
+    if (finger != 0 && finger != 1)
+        return -EINVAL;
+    memset(c, 0, sizeof *c);
+    /* The built-in world is symmetric: a part held between the fingers
+     * presses on both pads with the grip force, centred. */
+    if (ax->part && ax->force > 0.0 &&
+        ax->width < wsg_axis_rep(ax, ax->part_width)) {
+        c->force = ax->force;
+        c->w = ax->patch_w > 0.0 ? ax->patch_w : WSG_AXIS_PATCH_MM;
+        c->h = ax->patch_h > 0.0 ? ax->patch_h : WSG_AXIS_PATCH_MM;
+    }
+    return 0;
+}
+
 int wsg_axis_grasp_collided(const struct wsg_axis *ax)
 {
     return ax->grasp_collided;
@@ -1440,6 +1457,12 @@ void wsg_axis_set_part(struct wsg_axis *ax, double width, double stiffness)
     ax->part = 1;
     ax->part_width = width;
     ax->part_stiffness = stiffness > 0 ? stiffness : ax->cfg.part_stiffness;
+}
+
+void wsg_axis_set_part_patch(struct wsg_axis *ax, double w, double h)
+{
+    ax->patch_w = w > 0.0 ? w : WSG_AXIS_PATCH_MM;
+    ax->patch_h = h > 0.0 ? h : WSG_AXIS_PATCH_MM;
 }
 
 void wsg_axis_set_obstacle(struct wsg_axis *ax, double width)

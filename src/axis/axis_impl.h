@@ -84,6 +84,7 @@ struct wsg_axis {
     /* The world: a part between the fingers. */
     int part;
     double part_width, part_stiffness;
+    double patch_w, patch_h; /* mm, where the part touches each pad */
     int obstacle; /* something rigid stands in the way */
     double obstacle_width;
     double ref_offset;       /* reported width - physical width: nonzero after
