@@ -30,8 +30,8 @@ done
 
 # ---- building and running ----
 pkgs="cmake make gcc libc6-dev"
-# Scripts on the gripper run on Debian's Lua 5.4, found with pkg-config.
-pkgs="$pkgs pkgconf liblua5.4-dev"
+# Scripts on the gripper run on Debian's Lua 5.2, found with pkg-config.
+pkgs="$pkgs pkgconf liblua5.2-dev"
 # The web page (--web) is served by GNU libmicrohttpd, found with
 # pkg-config; its -dev package brings GnuTLS's headers, which the static
 # stand-in for GnuTLS is checked against (src/daemon/web/gnutls_none.c).

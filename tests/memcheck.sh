@@ -42,7 +42,7 @@ if [ $# = 0 ]; then
         integ_webhostile \
         integ_script:api integ_script:ifaces integ_script:speed \
         integ_script:lifecycle integ_script:sandbox integ_script:lockstep \
-        integ_script:startup \
+        integ_script:startup integ_script:dialect \
         integ_gcl:commands integ_gcl:framing integ_gcl:rules \
         integ_gcl:fleet integ_gcl:log scenarios
 fi

@@ -166,7 +166,7 @@ static int api_bton(lua_State *L)
         int ok;
 
         lua_rawgeti(L, 1, i + 1);
-        v = lua_tointegerx(L, -1, &ok);
+        ok = wsg_script_whole(L, -1, &v);
         if (!ok || v < 0 || v > 255)
             return luaL_error(L, "bton: element %d is not a byte", i + 1);
         b[i] = (uint8_t)v;
@@ -209,7 +209,8 @@ static int api_setmetatable(lua_State *L)
     int t = lua_type(L, 2), gc;
 
     luaL_checktype(L, 1, LUA_TTABLE);
-    luaL_argexpected(L, t == LUA_TNIL || t == LUA_TTABLE, 2, "nil or table");
+    luaL_argcheck(L, t == LUA_TNIL || t == LUA_TTABLE, 2,
+                  "nil or table expected");
     if (luaL_getmetafield(L, 1, "__metatable") != LUA_TNIL)
         return luaL_error(L, "cannot change a protected metatable");
     lua_settop(L, 2);
@@ -217,7 +218,8 @@ static int api_setmetatable(lua_State *L)
      * own can hide it or keep it from being taken out. */
     if (t == LUA_TTABLE) {
         lua_pushliteral(L, "__gc");
-        gc = lua_rawget(L, 2) != LUA_TNIL;
+        lua_rawget(L, 2);
+        gc = !lua_isnil(L, -1);
     } else {
         gc = 0;
     }
@@ -237,16 +239,6 @@ static int api_setmetatable(lua_State *L)
     lua_rawset(L, 2);
     lua_settop(L, 1);
     return 1;
-}
-
-static int api_frexp(lua_State *L)
-{
-    int e;
-    double m = frexp(luaL_checknumber(L, 1), &e);
-
-    lua_pushnumber(L, m);
-    lua_pushinteger(L, e);
-    return 2;
 }
 
 /* ---- cmd ---- */
@@ -279,10 +271,8 @@ static int cmd_unregister(lua_State *L)
     return 1;
 }
 
-static int cmd_read_k(lua_State *L, int status, lua_KContext ctx)
+static int cmd_read_k(lua_State *L)
 {
-    (void)status;
-    (void)ctx;
     return wsg_script_take(wsg_script_of(L), L);
 }
 
@@ -741,13 +731,13 @@ static int api_searcher(lua_State *L)
 
 /* Lua's own libraries that a script gets; io, debug and the rest of os
  * stay out. */
-static const luaL_Reg std_libs[] = {{LUA_GNAME, luaopen_base},
+static const luaL_Reg std_libs[] = {{"_G", luaopen_base},
                                     {LUA_LOADLIBNAME, luaopen_package},
                                     {LUA_COLIBNAME, luaopen_coroutine},
                                     {LUA_TABLIBNAME, luaopen_table},
                                     {LUA_STRLIBNAME, luaopen_string},
                                     {LUA_MATHLIBNAME, luaopen_math},
-                                    {LUA_UTF8LIBNAME, luaopen_utf8},
+                                    {LUA_BITLIBNAME, luaopen_bit32},
                                     {LUA_OSLIBNAME, luaopen_os},
                                     {NULL, NULL}};
 
@@ -764,77 +754,25 @@ static void set_nil(lua_State *L, const char *table, const char *const *names)
     lua_pop(L, 1);
 }
 
-/* Run by the host in the fresh state, trusted: the compatibility names,
- * load restricted to text, printf, and string.format with the integer
- * conversions of Lua 5.1 and 5.2 ("%d" of 2.5 prints 2 there; Lua 5.4
- * raises an error, which would stop scripts written for the gripper).
- * load passes its env on only when the script gave one: Lua's load tells
- * an absent env from a nil one, and a nil one leaves the chunk without
- * globals. The prelude's locals must not take the names of the globals it
- * sets (table.unpack is tunpack here, so that unpack is the global). */
+/* Run by the host in the fresh state, trusted: load restricted to text
+ * (Lua 5.2's loadstring is its load, which takes a precompiled chunk too),
+ * printf, and the Lua 5.1 names that Lua 5.2 dropped and scripts of the
+ * gripper's era still use (table.getn, math.mod, string.gfind). load
+ * passes its env on only when the script gave one: Lua's load tells an
+ * absent env from a nil one, and a nil one leaves the chunk without
+ * globals. */
 static const char *const prelude[] = {
     "local rawload, output = ...\n",
-    "local floor, ceil, mtype = math.floor, math.ceil, math.type\n",
-    "local pack, tunpack, format = table.pack, table.unpack, string.format\n",
-    "local rawgmatch = string.gmatch\n",
     "load = function(chunk, name, mode, ...)\n",
-    "  return rawload(chunk, name, 't', ...)\n", "end\n",
+    "  return rawload(chunk, name, 't', ...)\n",
+    "end\n",
     "loadstring = function(s, name) return rawload(s, name, 't') end\n",
-    "local function toint(v)\n",
-    "  if mtype(v) == 'float' and v == v and v > -2^63 and v < 2^63 then\n",
-    "    return v >= 0 and floor(v) or ceil(v)\n", "  end\n", "  return v\n",
-    "end\n", "string.format = function(fmt, ...)\n",
-    "  local args, i = pack(...), 0\n",
-    "  for conv in rawgmatch(tostring(fmt), '%%[-+ #0]*%d*%.?%d*([%a%%])') "
-    "do\n",
-    "    if conv ~= '%' then\n", "      i = i + 1\n",
-    "      if conv:find('[cdiouxX]') then args[i] = toint(args[i]) end\n",
-    "    end\n", "  end\n", "  return format(fmt, tunpack(args, 1, args.n))\n",
-    "end\n", "local sformat = string.format\n",
+    "local sformat = string.format\n",
     "printf = function(fmt, ...) output(sformat(fmt, ...)) end\n",
-    "unpack = table.unpack\n", "table.getn = function(t) return #t end\n",
-    "table.maxn = function(t)\n", "  local n = 0\n",
-    "  for k in pairs(t) do if mtype(k) and k > n then n = k end end\n",
-    "  return n\n", "end\n", "math.pow = function(x, y) return x ^ y end\n",
+    "table.getn = function(t) return #t end\n",
     "math.mod = math.fmod\n",
-    "math.log10 = function(x) return math.log(x, 10) end\n",
-    "math.ldexp = function(m, e) return m * 2.0 ^ e end\n",
-    "math.atan2 = math.atan\n",
-    "math.cosh = function(x) return (math.exp(x) + math.exp(-x)) / 2 end\n",
-    "math.sinh = function(x) return (math.exp(x) - math.exp(-x)) / 2 end\n",
-    "math.tanh = function(x)\n",
-    "  if x > 20 then return 1.0 elseif x < -20 then return -1.0 end\n",
-    "  local a, b = math.exp(x), math.exp(-x)\n",
-    "  return (a - b) / (a + b)\n", "end\n", "local M = 0xFFFFFFFF\n",
-    "local function u(x) return floor(x) & M end\n",
-    "local function fold(op, r, ...)\n",
-    "  for i = 1, select('#', ...) do r = op(r, u(select(i, ...))) end\n",
-    "  return r\n", "end\n", "local function lsh(x, n)\n",
-    "  if n <= -32 or n >= 32 then return 0 end\n",
-    "  if n < 0 then return u(x) >> -n end\n", "  return (u(x) << n) & M\n",
-    "end\n", "bit32 = {\n",
-    "  band = function(...) return fold(function(a, b) return a & b end, M,",
-    " ...) end,\n",
-    "  bor = function(...) return fold(function(a, b) return a | b end, 0,",
-    " ...) end,\n",
-    "  bxor = function(...) return fold(function(a, b) return a ~ b end, 0,",
-    " ...) end,\n", "  bnot = function(x) return ~u(x) & M end,\n",
-    "  lshift = lsh,\n", "  rshift = function(x, n) return lsh(x, -n) end,\n",
-    "  arshift = function(x, n)\n", "    local v = u(x)\n",
-    "    if v >= 0x80000000 then v = v - 0x100000000 end\n",
-    "    if n >= 32 then return v < 0 and M or 0 end\n",
-    "    return floor(v / 2 ^ n) & M\n", "  end,\n",
-    "  extract = function(n, f, w)\n", "    w = w or 1\n",
-    "    return (u(n) >> f) & ((1 << w) - 1)\n", "  end,\n",
-    "  replace = function(n, v, f, w)\n", "    w = w or 1\n",
-    "    local m = ((1 << w) - 1) << f\n",
-    "    return ((u(n) & ~m) | ((u(v) << f) & m)) & M\n", "  end,\n",
-    "  lrotate = function(x, n)\n", "    n = n % 32\n",
-    "    return ((u(x) << n) | (u(x) >> (32 - n))) & M\n", "  end,\n", "}\n",
-    "bit32.btest = function(...) return bit32.band(...) ~= 0 end\n",
-    "bit32.rrotate = function(x, n) return bit32.lrotate(x, -n) end\n",
-    /* Lua 5.1's name of gmatch. */
-    "string.gfind = string.gmatch\n", NULL};
+    "string.gfind = string.gmatch\n",
+    NULL};
 
 /* lua_load's reader over the prelude's pieces (C99 caps a string literal
  * at 4095 bytes, so the prelude is an array of them). */
@@ -926,12 +864,6 @@ void wsg_script_open_api(lua_State *L, struct wsg_script *h)
     lua_setglobal(L, "grasping");
     luaL_newlib(L, finger_lib);
     lua_setglobal(L, "finger");
-    /* No math.nan: the gripper's Lua has none (a script that uses it gets
-     * nil, as on the gripper; 0/0 is a NaN). */
-    lua_getglobal(L, LUA_MATHLIBNAME);
-    lua_pushcfunction(L, api_frexp);
-    lua_setfield(L, -2, "frexp");
-    lua_pop(L, 1);
 
     /* The prelude gets the real load and the output, and keeps them to
      * itself. */

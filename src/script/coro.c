@@ -1,7 +1,7 @@
 /*
  * The functions of a script's standard library that resume its own code
  * or catch its errors, over Lua's: coroutine.resume and wrap, which carry
- * a preemption through, and pcall, xpcall, coroutine.close and load,
+ * a preemption through, and pcall, xpcall and load,
  * which pass on an error where the script has used up its allowance of
  * slices that cannot yield, and pay the yield such a stretch owes as
  * soon as they return to where the script can yield.
@@ -17,7 +17,9 @@
  * on up to the body and the host. When the host resumes the body, each
  * resume's continuation resumes the coroutine inside it again.
  *
- * What they return and raise is Lua 5.4's (lcorolib.c, lbaselib.c).
+ * What they return and raise is Lua 5.2's (lcorolib.c, lbaselib.c). A
+ * continuation (Lua 5.2's) is a C function that asks lua_getctx for its
+ * status and context.
  */
 #include <lauxlib.h>
 #include <lualib.h>
@@ -32,8 +34,8 @@
  * returns moved to L, their count, or -1 with the error on L's top. A
  * preemption on its way to the host is passed on: L yields, and k (with
  * ctx) resumes co again when L is resumed. */
-static int co_run(lua_State *L, lua_State *co, int narg, lua_KContext ctx,
-                  lua_KFunction k)
+static int co_run(lua_State *L, lua_State *co, int narg, int ctx,
+                  lua_CFunction k)
 {
     struct wsg_script *h = wsg_script_of(L);
     lua_State *was = h->running;
@@ -44,6 +46,11 @@ static int co_run(lua_State *L, lua_State *co, int narg, lua_KContext ctx,
     } else {
         if (!lua_checkstack(co, narg)) {
             lua_pushliteral(L, "too many arguments to resume");
+            return -1;
+        }
+        /* Lua 5.2's lua_resume leaves this to its caller. */
+        if (lua_status(co) == LUA_OK && lua_gettop(co) == 0) {
+            lua_pushliteral(L, "cannot resume dead coroutine");
             return -1;
         }
         lua_xmove(L, co, narg);
@@ -57,7 +64,8 @@ static int co_run(lua_State *L, lua_State *co, int narg, lua_KContext ctx,
         h->nest++;
         h->running = co;
         h->preempting = 0;
-        status = lua_resume(co, L, narg, &nres);
+        status = lua_resume(co, L, narg);
+        nres = status == LUA_OK || status == LUA_YIELD ? lua_gettop(co) : 0;
         h->nest--;
         h->running = was;
         if (status != LUA_YIELD || !h->preempting)
@@ -79,8 +87,6 @@ static int co_run(lua_State *L, lua_State *co, int narg, lua_KContext ctx,
         lua_xmove(co, L, nres);
         return nres;
     }
-    /* A copy stays for coroutine.close to return. */
-    lua_pushvalue(co, -1);
     lua_xmove(co, L, 1);
     return -1;
 }
@@ -93,11 +99,12 @@ static void pass_on(lua_State *L)
         lua_error(L);
 }
 
-static int pay_k(lua_State *L, int status, lua_KContext n)
+static int pay_k(lua_State *L)
 {
-    (void)L;
-    (void)status;
-    return (int)n;
+    int n = 0;
+
+    lua_getctx(L, &n);
+    return n;
 }
 
 /* Return the n values at the top, after the yield owed by a stretch that
@@ -130,14 +137,12 @@ static lua_State *co_arg(lua_State *L)
 {
     lua_State *co = lua_tothread(L, 1);
 
-    luaL_argexpected(L, co, 1, "coroutine");
+    luaL_argcheck(L, co, 1, "coroutine expected");
     return co;
 }
 
-static int co_resume_k(lua_State *L, int status, lua_KContext ctx)
+static int co_resume_k(lua_State *L)
 {
-    (void)status;
-    (void)ctx;
     return resume_end(L, co_run(L, lua_tothread(L, 1), AGAIN, 0, co_resume_k));
 }
 
@@ -148,15 +153,11 @@ static int co_resume(lua_State *L)
     return resume_end(L, co_run(L, co, lua_gettop(L) - 1, 0, co_resume_k));
 }
 
-/* An error in the coroutine leaves its to-be-closed variables as they
- * are: Lua would close them (wrap, close) with the hooks still off when
- * the error was raised by the count hook (the stuck error), and a
- * __close that loops would hold the daemon (*choice*, as finalizers). */
-static int wrap_end(lua_State *L, lua_State *co, int r)
+static int wrap_end(lua_State *L, int r)
 {
     if (r >= 0)
         return pay(L, r);
-    if (lua_status(co) != LUA_ERRMEM && lua_type(L, -1) == LUA_TSTRING) {
+    if (lua_isstring(L, -1)) {
         luaL_where(L, 1);
         lua_insert(L, -2);
         lua_concat(L, 2);
@@ -164,20 +165,18 @@ static int wrap_end(lua_State *L, lua_State *co, int r)
     return lua_error(L);
 }
 
-static int co_wrap_k(lua_State *L, int status, lua_KContext ctx)
+static int co_wrap_k(lua_State *L)
 {
     lua_State *co = lua_tothread(L, lua_upvalueindex(1));
 
-    (void)status;
-    (void)ctx;
-    return wrap_end(L, co, co_run(L, co, AGAIN, 0, co_wrap_k));
+    return wrap_end(L, co_run(L, co, AGAIN, 0, co_wrap_k));
 }
 
 static int co_wrapped(lua_State *L)
 {
     lua_State *co = lua_tothread(L, lua_upvalueindex(1));
 
-    return wrap_end(L, co, co_run(L, co, lua_gettop(L), 0, co_wrap_k));
+    return wrap_end(L, co_run(L, co, lua_gettop(L), 0, co_wrap_k));
 }
 
 static int co_wrap(lua_State *L)
@@ -211,34 +210,8 @@ static int api_load(lua_State *L)
     return pay(L, n);
 }
 
-/* coroutine.close: Lua's (in this frame), but for a coroutine that ended
- * in an error, whose to-be-closed variables stay as they are (wrap_end):
- * false and its error. */
-static int co_close(lua_State *L)
-{
-    lua_CFunction close = lua_tocfunction(L, lua_upvalueindex(1));
-    lua_State *co = co_arg(L);
-    int st = lua_status(co), n;
-
-    if (st != LUA_OK && st != LUA_YIELD) {
-        lua_pushboolean(L, 0);
-        if (lua_gettop(co) > 0) {
-            lua_pushvalue(co, -1);
-            lua_xmove(co, L, 1);
-        } else {
-            lua_pushnil(L);
-        }
-        return 2;
-    }
-    n = close(L);
-    if (n == 2 && !lua_toboolean(L, -2) &&
-        wsg_script_doomed(wsg_script_of(L), L))
-        return lua_error(L);
-    return pay(L, n);
-}
-
 /* pcall, as Lua's: its results above the true at 1. */
-static int pcall_end(lua_State *L, int status, lua_KContext extra)
+static int pcall_end(lua_State *L, int status, int extra)
 {
     if (status != LUA_OK && status != LUA_YIELD) {
         pass_on(L);
@@ -249,6 +222,13 @@ static int pcall_end(lua_State *L, int status, lua_KContext extra)
     return pay(L, lua_gettop(L) - (int)extra);
 }
 
+static int pcall_k(lua_State *L)
+{
+    int extra = 0, status = lua_getctx(L, &extra);
+
+    return pcall_end(L, status, extra);
+}
+
 static int api_pcall(lua_State *L)
 {
     int status;
@@ -256,7 +236,7 @@ static int api_pcall(lua_State *L)
     luaL_checkany(L, 1);
     lua_pushboolean(L, 1);
     lua_insert(L, 1);
-    status = lua_pcallk(L, lua_gettop(L) - 2, LUA_MULTRET, 0, 0, pcall_end);
+    status = lua_pcallk(L, lua_gettop(L) - 2, LUA_MULTRET, 0, 0, pcall_k);
     return pcall_end(L, status, 0);
 }
 
@@ -273,7 +253,9 @@ static int api_pcall(lua_State *L)
  * cannot see where the error was raised). phase 0: the function ran; n:
  * the handler's n-th call ran. Stack: f, handler, then what the call
  * left. */
-static int xpcall_end(lua_State *L, int status, lua_KContext phase)
+static int xpcall_k(lua_State *L);
+
+static int xpcall_end(lua_State *L, int status, int phase)
 {
     if (status == LUA_OK || status == LUA_YIELD) {
         if (phase == 0)
@@ -296,8 +278,15 @@ static int xpcall_end(lua_State *L, int status, lua_KContext phase)
     lua_settop(L, 3);
     lua_pushvalue(L, 2);
     lua_pushvalue(L, 3);
-    status = lua_pcallk(L, 1, 1, 0, phase + 1, xpcall_end);
+    status = lua_pcallk(L, 1, 1, 0, phase + 1, xpcall_k);
     return xpcall_end(L, status, phase + 1);
+}
+
+static int xpcall_k(lua_State *L)
+{
+    int phase = 0, status = lua_getctx(L, &phase);
+
+    return xpcall_end(L, status, phase);
 }
 
 static int api_xpcall(lua_State *L)
@@ -307,8 +296,9 @@ static int api_xpcall(lua_State *L)
     luaL_checktype(L, 2, LUA_TFUNCTION);
     lua_pushboolean(L, 1);
     lua_pushvalue(L, 1);
-    lua_rotate(L, 3, 2);
-    status = lua_pcallk(L, n - 2, LUA_MULTRET, 0, 0, xpcall_end);
+    lua_insert(L, 3);
+    lua_insert(L, 3);
+    status = lua_pcallk(L, n - 2, LUA_MULTRET, 0, 0, xpcall_k);
     return xpcall_end(L, status, 0);
 }
 
@@ -327,7 +317,6 @@ void wsg_script_open_coro(lua_State *L)
     lua_setfield(L, -2, "resume");
     lua_pushcfunction(L, co_wrap);
     lua_setfield(L, -2, "wrap");
-    wrap_field(L, "close", co_close);
     lua_pop(L, 1);
     lua_pushglobaltable(L);
     lua_pushcfunction(L, api_pcall);

@@ -3,7 +3,7 @@
  * not allocation, spent from the slice: the count hook counts one
  * instruction for a call, however long the call runs, and the allocator
  * counts only what the call allocates. A loop of such calls (a
- * table.insert at the front of a big table, a utf8.len of megabytes, a
+ * table.insert at the front of a big table, a tonumber of megabytes, a
  * full collectgarbage()) would otherwise do a slice's worth of work at
  * every instruction, for a whole slice of instructions.
  *
@@ -12,9 +12,7 @@
  * own), so its errors name it as before; what it did is spent afterwards
  * (wsg_script_spend), and the slice ends at the next instruction when
  * that uses it up. A single call is still as long as the data a script of
- * the memory cap can hold makes it. table.move, which can walk 2^63
- * indexes of nothing, is the project's: it moves a slice's worth at a
- * time and yields across itself in between.
+ * the memory cap can hold makes it.
  */
 #include <string.h>
 
@@ -80,7 +78,7 @@ static lua_Integer cost_of(lua_State *L, int kind)
     case COST_CONCAT:
         i = cost_opt(L, 3, 1);
         j = cost_opt(L, 4, cost_len(L, 1));
-        return j >= i && j - i < LUA_MAXINTEGER / COST_STEPS_PER_ELEMENT
+        return j >= i && j - i < WSG_LUA_INTEGER_MAX / COST_STEPS_PER_ELEMENT
                    ? (j - i + 1) * COST_STEPS_PER_ELEMENT
                    : 0;
     case COST_SORT:
@@ -121,98 +119,13 @@ static void cost_wrap(lua_State *L, const char *name, int kind)
     lua_setfield(L, -2, name);
 }
 
-/* ---- table.move ---- */
-
-/* As Lua's checktab: a table, or a value whose metatable has the field
- * the use needs (read raw). */
-static void move_checktab(lua_State *L, int arg, const char *field)
-{
-    if (lua_type(L, arg) == LUA_TTABLE)
-        return;
-    if (lua_getmetatable(L, arg)) {
-        lua_pushstring(L, field);
-        if (lua_rawget(L, -2) != LUA_TNIL) {
-            lua_pop(L, 2);
-            return;
-        }
-    }
-    luaL_checktype(L, arg, LUA_TTABLE);
-}
-
-/* Stack: a1, f, e, t, a2 (or nil), forward, the elements moved. */
-static int move_go(lua_State *L, int status, lua_KContext ctx)
-{
-    struct wsg_script *h = wsg_script_of(L);
-    lua_Integer f = lua_tointeger(L, 2), e = lua_tointeger(L, 3);
-    lua_Integer t = lua_tointeger(L, 4), n = e - f + 1, i, k;
-    int tt = lua_isnil(L, 5) ? 1 : 5, forward = lua_toboolean(L, 6);
-    uint32_t left;
-
-    (void)status;
-    (void)ctx;
-    for (;;) {
-        i = lua_tointeger(L, 7);
-        if (i >= n)
-            break;
-        left = h->slice.left(h, L) / COST_STEPS_PER_ELEMENT;
-        for (k = 0; k < (lua_Integer)left && i < n; k++, i++) {
-            lua_Integer at = forward ? i : n - 1 - i;
-
-            lua_geti(L, 1, f + at);
-            lua_seti(L, tt, t + at);
-        }
-        lua_pushinteger(L, i);
-        lua_replace(L, 7);
-        wsg_script_spend(h, L, (uint32_t)k * COST_STEPS_PER_ELEMENT);
-        if (i < n && wsg_script_slice_over(h, L))
-            return lua_yieldk(L, 0, 0, move_go);
-    }
-    lua_pushvalue(L, tt);
-    return 1;
-}
-
-static int api_move(lua_State *L)
-{
-    lua_Integer f = luaL_checkinteger(L, 2);
-    lua_Integer e = luaL_checkinteger(L, 3);
-    lua_Integer t = luaL_checkinteger(L, 4);
-    int tt = !lua_isnoneornil(L, 5) ? 5 : 1, forward;
-
-    move_checktab(L, 1, "__index");
-    move_checktab(L, tt, "__newindex");
-    lua_settop(L, 5);
-    if (e < f) {
-        lua_pushvalue(L, tt);
-        return 1;
-    }
-    luaL_argcheck(L, f > 0 || e < LUA_MAXINTEGER + f, 3,
-                  "too many elements to move");
-    luaL_argcheck(L, t <= LUA_MAXINTEGER - (e - f + 1) + 1, 4,
-                  "destination wrap around");
-    /* Overlapping within one table, forward onto itself: from the end. */
-    forward = t > e || t <= f || (tt != 1 && !lua_compare(L, 1, tt, LUA_OPEQ));
-    lua_pushboolean(L, forward);
-    lua_pushinteger(L, 0);
-    return move_go(L, LUA_OK, 0);
-}
-
 void wsg_script_open_costs(lua_State *L)
 {
-    static const char *const bytes_utf8[] = {"len", "offset", "codepoint",
-                                             NULL};
-    const char *const *name;
-
-    lua_getglobal(L, LUA_UTF8LIBNAME);
-    for (name = bytes_utf8; *name; name++)
-        cost_wrap(L, *name, COST_BYTES);
-    lua_pop(L, 1);
     lua_getglobal(L, LUA_TABLIBNAME);
     cost_wrap(L, "insert", COST_INSERT);
     cost_wrap(L, "remove", COST_REMOVE);
     cost_wrap(L, "concat", COST_CONCAT);
     cost_wrap(L, "sort", COST_SORT);
-    lua_pushcfunction(L, api_move);
-    lua_setfield(L, -2, "move");
     lua_pop(L, 1);
     lua_pushglobaltable(L);
     cost_wrap(L, "tonumber", COST_BYTES);

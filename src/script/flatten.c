@@ -16,7 +16,7 @@
 
 #include <lua.h>
 
-#include "script.h"
+#include "script_impl.h"
 
 struct flat {
     uint8_t *out;
@@ -59,7 +59,7 @@ static int flat_value(lua_State *L, struct flat *f, int depth)
     }
     switch (lua_type(L, -1)) {
     case LUA_TNUMBER:
-        v = lua_tointegerx(L, -1, &isint);
+        isint = wsg_script_whole(L, -1, &v);
         if (!isint || v < 0 || v > 255)
             return flat_fail(f,
                              "a number must be a whole byte in 0..255 "

@@ -19,6 +19,8 @@
 
 #include <errno.h>
 #include <fcntl.h>
+#include <math.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -41,14 +43,101 @@
 
 static void script_hook(lua_State *L, lua_Debug *ar);
 
+int wsg_script_whole(lua_State *L, int idx, lua_Integer *out)
+{
+    lua_Number d;
+
+    if (!lua_isnumber(L, idx))
+        return 0;
+    d = lua_tonumber(L, idx);
+    if (!(d >= (lua_Number)PTRDIFF_MIN && d < -(lua_Number)PTRDIFF_MIN) ||
+        d != floor(d))
+        return 0;
+    *out = (lua_Integer)d;
+    return 1;
+}
+
 uint64_t wsg_script_now(const struct wsg_script *h)
 {
     return wsg_axis_time(wsg_device_axis_const(h->dev));
 }
 
+/* Lua 5.2 has no lua_isyieldable (5.3 added it, to read the same field):
+ * a thread can yield when no call on its stack was made without a
+ * continuation, which Lua 5.2 counts in its lua_State (nny) and shows
+ * through no function. The members up to it are mirrored here from Lua
+ * 5.2's lstate.h, and the mirror is checked against Lua itself before a
+ * script first runs (mirror_check): where it does not hold, no script is
+ * ever preempted, and one that runs long fails with the stuck error
+ * instead of holding the daemon. */
+struct lua52_state {
+    void *next;
+    unsigned char tt, marked, status;
+    void *top, *l_G, *ci;
+    const void *oldpc;
+    void *stack_last, *stack;
+    int stacksize;
+    unsigned short nny, nCcalls;
+    unsigned char hookmask, allowhook;
+    int basehookcount, hookcount;
+};
+
+static int lua52_yieldable(lua_State *L)
+{
+    return ((const struct lua52_state *)(const void *)L)->nny == 0;
+}
+
+/* -1: not checked yet; 0: the mirror does not hold; 1: it does. */
+static int mirror_ok = -1;
+
+static void mirror_hook(lua_State *L, lua_Debug *ar)
+{
+    (void)L;
+    (void)ar;
+}
+
+/* Records, in the integer at upvalue 1's address, L's nny. */
+static int mirror_probe(lua_State *L)
+{
+    unsigned *seen = lua_touserdata(L, lua_upvalueindex(1));
+
+    *seen = ((const struct lua52_state *)(const void *)L)->nny;
+    return 0;
+}
+
+/* What Lua 5.2 says of the fields the mirror reads: a fresh thread's
+ * count hook is in basehookcount, nny is 0 while the thread runs
+ * resumed, and 2 in a function the main thread calls from C (1 for the
+ * main thread, 1 for the call). */
+static int mirror_check(lua_State *L)
+{
+    const struct lua52_state *m;
+    unsigned in_co = 99, in_call = 99;
+    lua_State *co;
+    int ok;
+
+    if (!lua_checkstack(L, 4))
+        return 0;
+    co = lua_newthread(L);
+    m = (const struct lua52_state *)(const void *)co;
+    lua_sethook(co, mirror_hook, LUA_MASKCOUNT, 4321);
+    ok = m->basehookcount == 4321 && m->hookmask == LUA_MASKCOUNT &&
+         m->nny == 1;
+    lua_sethook(co, NULL, 0, 0);
+    lua_pushlightuserdata(L, &in_co);
+    lua_pushcclosure(L, mirror_probe, 1);
+    lua_xmove(L, co, 1);
+    ok = ok && lua_resume(co, L, 0) == LUA_OK;
+    lua_pushlightuserdata(L, &in_call);
+    lua_pushcclosure(L, mirror_probe, 1);
+    ok = ok && lua_pcall(L, 0, 0, 0) == LUA_OK;
+    lua_pop(L, 1); /* the thread */
+    return ok && in_co == 0 && in_call == 2;
+}
+
 int wsg_script_preemptible(struct wsg_script *h, lua_State *L)
 {
-    if (!lua_isyieldable(L))
+    if (mirror_ok != 1 || !lua52_yieldable(L))
         return 0;
     if (h->nest == 0)
         return L == h->co;
@@ -300,7 +389,7 @@ static void script_fail(struct wsg_script *h, int status)
  * on the body's stack are what the wait it was in returns. */
 static void script_resume(struct wsg_script *h, int nargs)
 {
-    int nres, st;
+    int st;
 
     h->state = WSG_SCRIPT_RUNNING;
     h->budget = WSG_SCRIPT_SLICE;
@@ -313,11 +402,11 @@ static void script_resume(struct wsg_script *h, int nargs)
     h->preempting = 0;
     h->nest = 0;
     h->running = h->co;
-    st = lua_resume(h->co, h->L, nargs, &nres);
+    st = lua_resume(h->co, h->L, nargs);
     h->running = NULL;
     h->preempting = 0;
     if (st == LUA_YIELD) {
-        lua_pop(h->co, nres);
+        lua_settop(h->co, 0);
         if (h->state == WSG_SCRIPT_RUNNING) {
             /* A yield of the script's own (coroutine.yield in the body):
              * nothing to wait for; it goes on at the next turn. */
@@ -611,7 +700,8 @@ static int script_load(struct wsg_script *h, int fd, char *err, size_t errlen)
         snprintf(err, errlen, "not enough memory for a Lua state");
         return -ENOMEM;
     }
-    *(struct wsg_script **)lua_getextraspace(h->L) = h;
+    if (mirror_ok < 0)
+        mirror_ok = mirror_check(h->L);
     wsg_script_open_api(h->L, h);
     h->co = lua_newthread(h->L);
     /* Kept in the registry so the collector leaves it while it runs. */

@@ -9,8 +9,8 @@
  * moments.
  *
  * The pattern language, its error messages and the order of the choices
- * are those of Lua 5.4's lstrlib.c (Copyright (C) 1994-2022 Lua.org,
- * PUC-Rio, MIT licence).
+ * are those of Lua's lstrlib.c, the same in Lua 5.2, which scripts run
+ * on, and 5.4 (Copyright (C) 1994-2022 Lua.org, PUC-Rio, MIT licence).
  */
 #include "match.h"
 

@@ -6,7 +6,7 @@
  * match that backtracks for hours is preempted like a loop in Lua is,
  * instead of holding the daemon inside one C call.
  *
- * The language and its errors are Lua 5.4's (lstrlib.c): the same
+ * The language and its errors are Lua 5.2's (lstrlib.c): the same
  * classes, sets, quantifiers, captures, %b, %f and back-references, the
  * same 32 captures, and the same depth of 200 nested choices ("pattern
  * too complex"). Errors come when the machine reaches the faulty item, as

@@ -1,5 +1,5 @@
 /*
- * The script host: a Lua 5.4 interpreter that runs one user script on a
+ * The script host: a Lua 5.2 interpreter that runs one user script on a
  * gripper, as the WSG firmware runs the scripts in /user. The script registers
  * command IDs (cmd.register) whose packets the device then hands here
  * instead of answering E_CMD_UNKNOWN, reads them (cmd.read), answers them

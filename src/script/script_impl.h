@@ -2,10 +2,17 @@
  * The script host's layout, private to src/script: host.c runs the
  * interpreter (state, sandbox, scheduling), api.c is the library the
  * script calls (cmd, mc, grasping, finger, ...). Both reach the host from
- * any Lua thread through the state's extra space.
+ * any Lua thread through the state's allocator, whose user data it is.
+ *
+ * The interpreter is Debian's Lua 5.2 (docs/scripting.md says why): its
+ * continuations are plain C functions that ask lua_getctx for the status
+ * and the context they were given.
  */
 #ifndef WSG_SCRIPT_IMPL_H
 #define WSG_SCRIPT_IMPL_H
+
+#include <stddef.h>
+#include <stdint.h>
 
 #include <lua.h>
 
@@ -71,8 +78,18 @@ struct wsg_script {
 
 static inline struct wsg_script *wsg_script_of(lua_State *L)
 {
-    return *(struct wsg_script **)lua_getextraspace(L);
+    void *h = NULL;
+
+    lua_getallocf(L, &h);
+    return h;
 }
+
+/* The largest lua_Integer (Lua 5.2's is a ptrdiff_t). */
+#define WSG_LUA_INTEGER_MAX PTRDIFF_MAX
+
+/* The number at idx when it is whole and a lua_Integer holds it: 1 with
+ * it in *out, else 0 (Lua 5.2's lua_tointegerx truncates 2.5 to 2). */
+int wsg_script_whole(lua_State *L, int idx, lua_Integer *out);
 
 /* The largest script or module file the host loads. */
 #define WSG_SCRIPT_SOURCE_MAX (4u << 20)
@@ -130,11 +147,11 @@ int wsg_script_slice_over(struct wsg_script *h, lua_State *L);
  * coroutine.resume, close and load re-raise it), or a loop catching it
  * would never let the daemon go. */
 int wsg_script_doomed(struct wsg_script *h, lua_State *L);
-/* coroutine.resume, wrap, close, pcall, xpcall and load, over Lua's
+/* coroutine.resume, wrap, pcall, xpcall and load, over Lua's
  * (coro.c), in the libraries opened in L. */
 void wsg_script_open_coro(lua_State *L);
-/* The library functions whose work is spent from the slice, and
- * table.move, which yields across itself (costs.c). */
+/* The library functions whose work is spent from the slice
+ * (costs.c). */
 void wsg_script_open_costs(lua_State *L);
 
 #endif

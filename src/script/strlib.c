@@ -1,5 +1,5 @@
 /*
- * string.find, match, gmatch and gsub as Lua 5.4 has them (the same
+ * string.find, match, gmatch and gsub as Lua 5.2 has them (the same
  * arguments, results and errors), over the pattern machine (match.c)
  * instead of Lua's recursive matcher, which a script could keep inside
  * one C call for hours: a %b() over 200 kB, a long set at every position,
@@ -18,6 +18,7 @@
 #include "strlib.h"
 
 #include <ctype.h>
+#include <stdint.h>
 #include <string.h>
 
 #include <lauxlib.h>
@@ -69,7 +70,7 @@ static void push_one(lua_State *L, const struct wsg_match *m, int i,
 {
     if (i >= m->level) {
         if (i != 0)
-            luaL_error(L, "invalid capture index %%%d", i + 1);
+            luaL_error(L, "invalid capture index");
         lua_pushlstring(L, s, (size_t)(e - s));
         return;
     }
@@ -102,7 +103,7 @@ struct find {
     size_t at, done; /* plain: the candidate, and its bytes compared */
 };
 
-static int find_k(lua_State *L, int status, lua_KContext ctx);
+static int find_k(lua_State *L);
 
 /* The slice is over: go on (0), or yield, the state moved into a
  * userdata first when it is still the C local (the yield leaves this C
@@ -112,7 +113,7 @@ static int find_over(lua_State *L, const struct wsg_budget *b, struct find *f,
                      int in_state)
 {
     if (!in_state) {
-        void *ud = lua_newuserdatauv(L, sizeof *f, 0);
+        void *ud = lua_newuserdata(L, sizeof *f);
 
         memcpy(ud, f, sizeof *f);
     }
@@ -184,7 +185,7 @@ static int find_plain(lua_State *L, const struct wsg_budget *b, struct find *f,
             return 2;
         }
         if (r == WSG_MATCH_NO) {
-            luaL_pushfail(L);
+            lua_pushnil(L);
             return 1;
         }
         find_over(L, b, f, in_state);
@@ -206,7 +207,7 @@ static int find_go(lua_State *L, const struct wsg_budget *b, struct find *f,
         }
         if (r == WSG_MATCH_NO) {
             if (f->s1 >= f->m.src_end || f->anchor) {
-                luaL_pushfail(L);
+                lua_pushnil(L);
                 return 1;
             }
             wsg_match_at(&f->m, ++f->s1);
@@ -216,13 +217,11 @@ static int find_go(lua_State *L, const struct wsg_budget *b, struct find *f,
     }
 }
 
-static int find_k(lua_State *L, int status, lua_KContext ctx)
+static int find_k(lua_State *L)
 {
     struct find *f = lua_touserdata(L, STATE);
     const struct wsg_budget *b = budget_at(L, 1);
 
-    (void)status;
-    (void)ctx;
     if (f->plain)
         return find_plain(L, b, f, 1);
     return find_go(L, b, f, 1);
@@ -253,7 +252,7 @@ static int find_aux(lua_State *L, int find)
 
     init = start_of(luaL_optinteger(L, 3, 1), ls) - 1;
     if (init > ls) {
-        luaL_pushfail(L);
+        lua_pushnil(L);
         return 1;
     }
     f.find = find;
@@ -266,7 +265,7 @@ static int find_aux(lua_State *L, int find)
             return 2;
         }
         if (lp > ls - init) {
-            luaL_pushfail(L);
+            lua_pushnil(L);
             return 1;
         }
         f.at = init;
@@ -298,12 +297,11 @@ static int str_match(lua_State *L)
 
 struct gmatch {
     struct wsg_match m;
-    const char *src;       /* where the next search starts */
-    const char *pos;       /* where the match being tried starts */
-    const char *lastmatch; /* where the last match ended */
+    const char *src; /* where the next search starts */
+    const char *pos; /* where the match being tried starts */
 };
 
-static int gmatch_k(lua_State *L, int status, lua_KContext ctx);
+static int gmatch_k(lua_State *L);
 
 /* The iterator's upvalues: the subject, the pattern (kept alive), the
  * state and the budget. */
@@ -320,10 +318,11 @@ static int gmatch_go(lua_State *L)
                 return lua_yieldk(L, 0, 0, gmatch_k);
             continue;
         }
-        /* A match that ends where the last one did is none (an empty
-         * match right after it). */
-        if (r == WSG_MATCH_YES && g->m.end != g->lastmatch) {
-            g->src = g->lastmatch = g->m.end;
+        /* The next call starts where this match ended, one on from
+         * an empty match (Lua 5.2's gmatch: an empty match right after
+         * a match counts). */
+        if (r == WSG_MATCH_YES) {
+            g->src = g->m.end == g->pos ? g->m.end + 1 : g->m.end;
             return push_all(L, &g->m, g->pos, g->m.end);
         }
         if (g->pos >= g->m.src_end)
@@ -332,10 +331,8 @@ static int gmatch_go(lua_State *L)
     }
 }
 
-static int gmatch_k(lua_State *L, int status, lua_KContext ctx)
+static int gmatch_k(lua_State *L)
 {
-    (void)status;
-    (void)ctx;
     return gmatch_go(L);
 }
 
@@ -352,23 +349,19 @@ static int gmatch_aux(lua_State *L)
     return gmatch_go(L);
 }
 
+/* Lua 5.2's gmatch has no start position: a third argument is ignored. */
 static int str_gmatch(lua_State *L)
 {
-    size_t ls, lp, init;
+    size_t ls, lp;
     const char *s = luaL_checklstring(L, 1, &ls);
     const char *p = luaL_checklstring(L, 2, &lp);
     struct gmatch *g;
 
-    init = start_of(luaL_optinteger(L, 3, 1), ls) - 1;
     lua_settop(L, 2);
-    g = lua_newuserdatauv(L, sizeof *g, 0);
-    /* Past the end: nothing to find (and no pointer past it). */
-    if (init > ls)
-        init = ls + 1;
+    g = lua_newuserdata(L, sizeof *g);
     wsg_match_init(&g->m, s, ls, p, lp);
-    g->src = s + init;
+    g->src = s;
     g->pos = g->src;
-    g->lastmatch = NULL;
     lua_pushvalue(L, lua_upvalueindex(1));
     lua_pushcclosure(L, gmatch_aux, 4);
     return 1;
@@ -378,10 +371,9 @@ static int str_gmatch(lua_State *L)
 
 struct gsub {
     struct wsg_match m;
-    const char *src;       /* where the next match is tried */
-    const char *lastmatch; /* where the last match ended */
-    const char *e;         /* a replacement called: its match's end */
-    lua_Integer n, max;    /* replacements made, and allowed */
+    const char *src;    /* where the next match is tried */
+    const char *e;      /* a replacement called: its match's end */
+    lua_Integer n, max; /* replacements made, and allowed */
     int anchor, changed, tr;
     int trying;      /* a match started at src is in progress */
     int calling;     /* the replacement function was called: its value is
@@ -389,7 +381,7 @@ struct gsub {
     size_t len, cap; /* the output, in the userdata at OUT */
 };
 
-static int gsub_k(lua_State *L, int status, lua_KContext ctx);
+static int gsub_k(lua_State *L);
 
 static void out_add(lua_State *L, struct gsub *g, const char *s, size_t n)
 {
@@ -403,7 +395,7 @@ static void out_add(lua_State *L, struct gsub *g, const char *s, size_t n)
             cap = g->len + n;
         if (cap < g->len)
             luaL_error(L, "resulting string too large");
-        buf = lua_newuserdatauv(L, cap, 0);
+        buf = lua_newuserdata(L, cap);
         memcpy(buf, lua_touserdata(L, OUT), g->len);
         lua_replace(L, OUT);
         g->cap = cap;
@@ -479,10 +471,18 @@ static int gsub_done(lua_State *L, struct gsub *g)
     return 2;
 }
 
-/* What follows a replacement, or a position without one. */
-static int gsub_next(struct gsub *g)
+/* What follows a match ending at e (NULL: none) tried at src, as in Lua
+ * 5.2: past a match that is not empty, else one character copied as it
+ * is (so an empty match right after a match counts). 1: done. */
+static int gsub_next(lua_State *L, struct gsub *g, const char *e)
 {
     g->trying = 0;
+    if (e && e > g->src)
+        g->src = e;
+    else if (g->src < g->m.src_end)
+        out_add(L, g, g->src++, 1);
+    else
+        return 1;
     return g->anchor;
 }
 
@@ -497,8 +497,7 @@ static int gsub_go(lua_State *L)
         if (g->calling) {
             g->calling = 0;
             add_result(L, g, g->src, g->e);
-            g->src = g->lastmatch = g->e;
-            if (gsub_next(g))
+            if (gsub_next(L, g, g->e))
                 break;
         }
         if (!g->trying) {
@@ -513,8 +512,8 @@ static int gsub_go(lua_State *L)
                 return lua_yieldk(L, 0, 0, gsub_k);
             continue;
         }
-        e = g->m.end;
-        if (r == WSG_MATCH_YES && e != g->lastmatch) {
+        e = r == WSG_MATCH_YES ? g->m.end : NULL;
+        if (e) {
             g->n++;
             switch (g->tr) {
             case LUA_TFUNCTION:
@@ -536,22 +535,15 @@ static int gsub_go(lua_State *L)
                 g->changed = 1;
                 break;
             }
-            g->src = g->lastmatch = e;
-        } else if (g->src < g->m.src_end) {
-            out_add(L, g, g->src++, 1);
-        } else {
-            break;
         }
-        if (gsub_next(g))
+        if (gsub_next(L, g, e))
             break;
     }
     return gsub_done(L, g);
 }
 
-static int gsub_k(lua_State *L, int status, lua_KContext ctx)
+static int gsub_k(lua_State *L)
 {
-    (void)status;
-    (void)ctx;
     return gsub_go(L);
 }
 
@@ -564,12 +556,12 @@ static int str_gsub(lua_State *L)
     lua_Integer max = luaL_optinteger(L, 4, (lua_Integer)srcl + 1);
     struct gsub *g;
 
-    luaL_argexpected(L,
-                     tr == LUA_TNUMBER || tr == LUA_TSTRING ||
-                         tr == LUA_TFUNCTION || tr == LUA_TTABLE,
-                     3, "string/function/table");
+    luaL_argcheck(L,
+                  tr == LUA_TNUMBER || tr == LUA_TSTRING ||
+                      tr == LUA_TFUNCTION || tr == LUA_TTABLE,
+                  3, "string/function/table expected");
     lua_settop(L, 4);
-    g = lua_newuserdatauv(L, sizeof *g, 0);
+    g = lua_newuserdata(L, sizeof *g);
     g->anchor = *p == '^';
     if (g->anchor) {
         p++;
@@ -577,16 +569,16 @@ static int str_gsub(lua_State *L)
     }
     wsg_match_init(&g->m, src, srcl, p, lp);
     g->src = src;
-    g->lastmatch = NULL;
     g->n = 0;
-    g->max = max;
+    /* Lua 5.2 takes the count as a size_t: a negative one is no limit. */
+    g->max = max < 0 ? PTRDIFF_MAX : max;
     g->changed = 0;
     g->tr = tr;
     g->trying = 0;
     g->calling = 0;
     g->len = 0;
     g->cap = OUT_FIRST;
-    lua_newuserdatauv(L, OUT_FIRST, 0);
+    lua_newuserdata(L, OUT_FIRST);
     return gsub_go(L);
 }
 

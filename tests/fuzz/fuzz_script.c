@@ -224,22 +224,9 @@ static int fa_table(struct rd *r, int depth, unsigned count, int extras,
  * nibble of the first byte is the kind, the high one its argument. */
 static int fa_value(struct rd *r, int depth)
 {
-    static const lua_Integer edge[16] = {-1,
-                                         0,
-                                         1,
-                                         2,
-                                         127,
-                                         128,
-                                         254,
-                                         255,
-                                         256,
-                                         257,
-                                         -256,
-                                         511,
-                                         -128,
-                                         65535,
-                                         LUA_MININTEGER,
-                                         LUA_MAXINTEGER};
+    static const lua_Integer edge[16] = {
+        -1,  0,   1,    2,   127,  128,   254,         255,
+        256, 257, -256, 511, -128, 65535, PTRDIFF_MIN, PTRDIFF_MAX};
     static const double frac[4] = {0.0, 0.5, 0.25, 1e-9};
     lua_State *L = A.L;
     unsigned b = rd_byte(r), arg = b >> 4;
@@ -361,7 +348,7 @@ static int fa_value(struct rd *r, int depth)
         if ((k = fa_new(FA_OTHER)) < 0)
             goto nil;
         if (arg % 3u == 0)
-            lua_newuserdatauv(L, 8, 1);
+            lua_newuserdata(L, 8);
         else if (arg % 3u == 1)
             lua_pushlightuserdata(L, &A);
         else
@@ -560,18 +547,20 @@ static const char *const fb_script[] = {
     "for _, id in ipairs(ids) do cmd.register(id) end\n"
     "local seq = 0\n"
     "local function head(s, kind)\n"
-    "  return {etob(E_SUCCESS), 0xA5, s & 0xFF, s >> 8, kind}\n"
+    "  return {etob(E_SUCCESS), 0xA5, bit32.band(s, 0xFF), bit32.rshift(s, "
+    "8), kind}\n"
     "end\n"
     "local function u32(v)\n"
-    "  return {v & 0xFF, (v >> 8) & 0xFF, (v >> 16) & 0xFF, (v >> 24) & "
-    "0xFF}\n"
+    "  local b, r = bit32.band, bit32.rshift\n"
+    "  return {b(v, 0xFF), b(r(v, 8), 0xFF), b(r(v, 16), 0xFF), r(v, 24)}\n"
     "end\n"
     "local H = {}\n"
     "H[0xB0] = function(id, p, s) cmd.send(id, head(s, 0), p) end\n"
     "H[0xBA] = H[0xB0]\n"
     "H[0xB1] = function(id, p, s)\n"
     "  local n = #p\n"
-    "  cmd.send(id, head(s, 1), n & 0xFF, n >> 8, {{{{{p[1] or 0}}}}},\n"
+    "  cmd.send(id, head(s, 1), bit32.band(n, 0xFF), bit32.rshift(n, 8), "
+    "{{{{{p[1] or 0}}}}},\n"
     "           string.char(table.unpack(p)), (p[1] or 0) > 127)\n"
     "end\n"
     "H[0xB2] = function(id, p, s)\n"
@@ -613,7 +602,7 @@ static const char *const fb_script[] = {
     "H[0xB5] = function(id, p, s)\n"
     "  local acc = 0\n"
     "  for i = 1, (p[1] or 0) * 400 do acc = (acc * 31 + i) % 65521 end\n"
-    "  cmd.send(id, head(s, 5), acc & 0xFF, acc >> 8)\n"
+    "  cmd.send(id, head(s, 5), bit32.band(acc, 0xFF), bit32.rshift(acc, 8))\n"
     "end\n"
     "H[0xB6] = function(id, p, s)\n"
     "  local k = p[1] or 0\n"
@@ -641,12 +630,12 @@ static const char *const fb_script[] = {
     "H[0xB9] = function(id, p, s)\n"
     "  if p[1] == 0xEE then error('requested failure') end\n"
     "  if p[1] == 0xED then return true end\n"
-    "  if p[1] == 0xEC then local x = string.rep('x', 1 << 22) end\n"
+    "  if p[1] == 0xEC then local x = string.rep('x', 2 ^ 22) end\n"
     "  if p[1] == 0xEB then\n"
     "    local t = {}\n"
-    "    for i = 1, 1 << 22 do t[i] = {i} end\n"
+    "    for i = 1, 2 ^ 22 do t[i] = {i} end\n"
     "  end\n"
-    "  cmd.send(id, head(s, 9), #p & 0xFF)\n"
+    "  cmd.send(id, head(s, 9), bit32.band(#p, 0xFF))\n"
     "end\n"
     "H[0xBB] = function(id, p, s)\n"
     "  local iface = cmd.interface() or '?'\n"
@@ -697,7 +686,7 @@ static const char *const fb_script[] = {
     "while true do\n"
     "  local id, p = cmd.read()\n"
     "  local s = seq\n"
-    "  seq = (seq + 1) & 0xFFFF\n"
+    "  seq = bit32.band(seq + 1, 0xFFFF)\n"
     "  if H[id](id, p, s) then return end\n"
     "end\n"};
 

@@ -32,7 +32,7 @@ while true do
     v = math.max(-VMAX, math.min(VMAX, v))
     mc.force(mc.blocked() and blocked_force or travel_force)
     mc.speed(v)
-    cmd.send(id, etob(E_SUCCESS), gripper.state() & 0xFF,
+    cmd.send(id, etob(E_SUCCESS), bit32.band(gripper.state(), 0xFF),
              ntob(mc.position()), ntob(mc.speed()), ntob(mc.aforce()),
              ntob(socket.gettime()))
   elseif id == 0xB0 then

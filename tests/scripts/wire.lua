@@ -1,13 +1,14 @@
 -- wire.lua: how the test scripts answer, for integ_script
 -- (tests/integration/integ_script.c), and the module the scripts require
 -- from beside them. A reply is E_SUCCESS, then values as text joined by
--- '|' (in pieces when it is long): floats with 17 significant digits, so that the test reads back the
--- very double the script had; integers, booleans and nil as tostring
--- writes them. serve() is the scripts' main loop.
+-- '|' (in pieces when it is long): numbers with 17 significant digits, so
+-- that the test reads back the very double the script had (a whole number
+-- prints as tostring writes it); booleans and nil as tostring writes them.
+-- serve() is the scripts' main loop.
 local wire = {name = "wire"}
 
 function wire.text(v)
-  if math.type(v) == "float" then
+  if type(v) == "number" then
     -- NaN prints as "nan" or "-nan" depending on the C library.
     if v ~= v then return "nan" end
     return string.format("%.17g", v)
