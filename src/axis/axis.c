@@ -732,7 +732,9 @@ static int wsg_axis_advance(struct wsg_axis *ax, double dt)
     }
     ax->speed = o.speed;
     ax->force = o.force;
-    if (over)
+    /* Arrived when the profile is over and the fingers stand (a plant
+     * with inertia lets them settle first). */
+    if (over && o.speed == 0.0)
         wsg_axis_arrived(ax);
     return 1;
 }
@@ -743,7 +745,10 @@ static int wsg_axis_push_at(const struct wsg_axis *ax, double dir, double f,
                             double *x)
 {
     struct wsg_drive d = wsg_axis_drive(ax, WSG_DRIVE_PUSH, dir, f);
-    struct wsg_fingers o = wsg_axis_sense(ax, &d);
+    struct wsg_fingers o;
+
+    d.x = wsg_axis_end_stop(ax, dir);
+    o = wsg_axis_sense(ax, &d);
 
     *x = o.width;
     return o.blocked;
@@ -865,8 +870,10 @@ static void wsg_axis_hold(struct wsg_axis *ax)
     struct wsg_motion snap;
     struct wsg_drive d =
         wsg_axis_drive(ax, WSG_DRIVE_CLAMP, ax->clamp_dir, ax->clamp_force);
-    struct wsg_fingers o = wsg_axis_sense(ax, &d);
+    struct wsg_fingers o;
 
+    d.x = ax->clamp_target;
+    o = wsg_axis_sense(ax, &d);
     if (o.blocked) {
         ax->width = o.width;
         ax->force = o.force; /* the built-in plant's: the clamp's force */
@@ -1019,6 +1026,7 @@ int wsg_axis_idle(const struct wsg_axis *ax)
     if (ax->clamping) {
         d = wsg_axis_drive(ax, WSG_DRIVE_CLAMP, ax->clamp_dir,
                            ax->clamp_force);
+        d.x = ax->clamp_target;
         o = wsg_axis_sense(ax, &d);
         if (!o.blocked || fabs(o.width - ax->width) > WSG_AXIS_EPS)
             return 0;
@@ -1468,7 +1476,12 @@ void wsg_axis_set_fault(struct wsg_axis *ax, uint32_t fault, int on)
 
 void wsg_axis_set_plant(struct wsg_axis *ax, struct wsg_plant *p)
 {
+    struct wsg_drive d;
+
     ax->plant = p;
+    /* The firmware counts from where this plant's fingers stand. */
+    d = wsg_axis_drive(ax, WSG_DRIVE_OFF, 0.0, 0.0);
+    ax->width = wsg_axis_sense(ax, &d).width;
 }
 
 struct wsg_plant *wsg_axis_plant(struct wsg_axis *ax)
