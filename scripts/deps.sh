@@ -36,6 +36,9 @@ pkgs="$pkgs pkgconf liblua5.2-dev"
 # pkg-config; its -dev package brings GnuTLS's headers, which the static
 # stand-in for GnuTLS is checked against (src/daemon/web/gnutls_none.c).
 pkgs="$pkgs libmicrohttpd-dev"
+# The MuJoCo plant (--physics mujoco) links Debian's MuJoCo 2.2, found
+# through its CMake config (without it the build leaves the plant out).
+pkgs="$pkgs libmujoco-dev"
 # setcap, for an ordinary user who wants the real gripper's port 1000
 # (README: Port 1000): `sudo setcap cap_net_bind_service=+ep build/wsgemu`.
 pkgs="$pkgs libcap2-bin"

@@ -99,7 +99,7 @@ struct wsg_axis;
  * that this is aligned for it; the words' types are those the struct
  * holds. Only the model reads or writes it, through a struct wsg_axis *
  * to it. */
-#define WSG_AXIS_STORAGE_WORDS 104
+#define WSG_AXIS_STORAGE_WORDS 108
 struct wsg_axis_storage {
     union {
         double d;

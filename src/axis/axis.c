@@ -289,7 +289,7 @@ void wsg_axis_init(struct wsg_axis *ax, const struct wsg_axis_config *cfg,
     ax->done_ctx = ctx;
     /* Power-up finger position is wherever they were left: mid-stroke. */
     ax->width = cfg->stroke / 2.0;
-    ax->part_stiffness = cfg->part_stiffness;
+    wsg_plant_builtin_init(&ax->builtin, cfg->stroke, cfg->part_stiffness);
     ax->temperature = cfg->ambient;
     wsg_axis_reset(ax);
 }
@@ -340,94 +340,72 @@ static double wsg_axis_rep(const struct wsg_axis *ax, double phys)
     return phys + ax->ref_offset;
 }
 
-/* Where the fingers stand on the part when they squeeze it with force f:
- * the part yields by f over its stiffness (the inverse of
- * wsg_axis_contact_force). */
-static double wsg_axis_squeezed(const struct wsg_axis *ax, double f)
-{
-    return wsg_axis_rep(ax, ax->part_width) - f / ax->part_stiffness;
-}
-
-/* The next block in direction dir from the current width when pushing
- * with force f: the part yields by f over its stiffness and resists
- * closing only; the obstacle is rigid either way. Returns 0 when nothing
- * but an end stop lies that way. */
-static int wsg_axis_next_block(const struct wsg_axis *ax, double dir, double f,
-                               double *x_block)
-{
-    double c[2];
-    int n = 0, i, found = 0;
-
-    if (dir < 0 && ax->part) {
-        double p = wsg_axis_squeezed(ax, f);
-        /* Fingers that already squeeze the part harder than f (left there
-         * by a block under a higher force limit) are blocked where they
-         * are, not let through the part. */
-        c[n++] = p > ax->width ? ax->width : p;
-    }
-    if (ax->obstacle)
-        c[n++] = wsg_axis_rep(ax, ax->obstacle_width);
-    for (i = 0; i < n; i++) {
-        if (dir < 0 ? c[i] > ax->width + WSG_AXIS_EPS
-                    : c[i] < ax->width - WSG_AXIS_EPS)
-            continue; /* behind the fingers */
-        if (!found || (dir < 0 ? c[i] > *x_block : c[i] < *x_block))
-            *x_block = c[i];
-        found = 1;
-    }
-    return found;
-}
-
-/* The mechanical end stop in direction dir, where the gripper sees it. */
+/* The mechanical end stop in direction dir, where the gripper sees it:
+ * the firmware knows its stroke; the plant has the stop itself. */
 static double wsg_axis_end_stop(const struct wsg_axis *ax, double dir)
 {
     return wsg_axis_rep(ax, dir < 0 ? 0.0 : ax->cfg.stroke);
 }
 
-/* Does a block still hold fingers that push in direction dir with force f
- * at the current width, and where exactly (*x_block)? A part follows the
- * fingers while it reaches them (it may grow or shrink); the obstacle and
- * the end stop hold them only where they are. The nearest one counts. */
-static int wsg_axis_block_at(const struct wsg_axis *ax, double dir, double f,
-                             double *x_block)
+/* The plant the drive moves: an attached one, or the built-in one held in
+ * the struct (so that a copy of the struct still finds its own). */
+static struct wsg_plant *wsg_axis_plant_of(struct wsg_axis *ax)
 {
-    double c[3];
-    int n = 0, i, found = 0;
-
-    if (dir < 0 && ax->part) {
-        double p = wsg_axis_squeezed(ax, f);
-        /* A part narrower than its own squeeze (made so while held) lets
-         * the fingers close only as far as the end stop. */
-        if (p < wsg_axis_end_stop(ax, -1.0))
-            p = wsg_axis_end_stop(ax, -1.0);
-        /* Squeezed harder than f (a part that grew while held): it holds
-         * the fingers where they are, as wsg_axis_next_block says. */
-        c[n++] = p > ax->width ? ax->width : p;
-    }
-    if (ax->obstacle &&
-        fabs(ax->width - wsg_axis_rep(ax, ax->obstacle_width)) <= WSG_AXIS_EPS)
-        c[n++] = wsg_axis_rep(ax, ax->obstacle_width);
-    if (fabs(ax->width - wsg_axis_end_stop(ax, dir)) <= WSG_AXIS_EPS)
-        c[n++] = wsg_axis_end_stop(ax, dir);
-    for (i = 0; i < n; i++) {
-        if (!found || (dir < 0 ? c[i] > *x_block : c[i] < *x_block))
-            *x_block = c[i];
-        found = 1;
-    }
-    return found;
+    return ax->plant ? ax->plant : &ax->builtin.base;
 }
 
-/* The contact force at width x while closing. A part placed wider than
- * the opening (the control channel can do that) would squeeze beyond
- * anything: the drive holds it with its force limit at most. */
-static double wsg_axis_contact_force(const struct wsg_axis *ax, double x)
+static const struct wsg_plant *wsg_axis_plant_c(const struct wsg_axis *ax)
 {
-    double p = wsg_axis_rep(ax, ax->part_width), f;
+    return ax->plant ? ax->plant : &ax->builtin.base;
+}
 
-    if (!ax->part || x >= p)
-        return 0.0;
-    f = ax->part_stiffness * (p - x);
-    return f < ax->force_limit ? f : ax->force_limit;
+/* A drive command of mode m, pushing in dir with force f, from where the
+ * fingers are. */
+static struct wsg_drive wsg_axis_drive(const struct wsg_axis *ax,
+                                       enum wsg_drive_mode m, double dir,
+                                       double f)
+{
+    struct wsg_drive d;
+
+    memset(&d, 0, sizeof d);
+    d.mode = m;
+    d.x = ax->width;
+    d.dir = dir;
+    d.force = f;
+    d.limit = ax->force_limit;
+    d.width = ax->width;
+    d.grip = ax->force;
+    d.offset = ax->ref_offset;
+    return d;
+}
+
+/* What the plant says of the fingers under drive d, now. */
+static struct wsg_fingers wsg_axis_sense(const struct wsg_axis *ax,
+                                         const struct wsg_drive *d)
+{
+    const struct wsg_plant *p = wsg_axis_plant_c(ax);
+    struct wsg_fingers o;
+
+    p->ops->sense(p, d, &o);
+    return o;
+}
+
+/* Command the drive for one step of dt and read the fingers back. */
+static struct wsg_fingers
+wsg_axis_drive_step(struct wsg_axis *ax, const struct wsg_drive *d, double dt)
+{
+    struct wsg_plant *p = wsg_axis_plant_of(ax);
+
+    p->ops->step(p, d, dt);
+    return wsg_axis_sense(ax, d);
+}
+
+/* The force on fingers standing free: what the part presses with. */
+static double wsg_axis_free_force(const struct wsg_axis *ax)
+{
+    struct wsg_drive d = wsg_axis_drive(ax, WSG_DRIVE_OFF, 0.0, 0.0);
+
+    return wsg_axis_sense(ax, &d).force;
 }
 
 static void wsg_axis_start(struct wsg_axis *ax, const struct wsg_motion *m)
@@ -444,7 +422,7 @@ static void wsg_axis_start(struct wsg_axis *ax, const struct wsg_motion *m)
     if (m->kind == WSG_MOTION_SPEED) {
         /* The velocity controller takes over from whatever moved the
          * fingers, at their velocity, against what they touch. */
-        ax->force = wsg_axis_contact_force(ax, ax->width);
+        ax->force = wsg_axis_free_force(ax);
     } else {
         /* A profile starts from rest: a motion that replaces a moving one
          * (a script's, over speed mode) starts where the fingers are. */
@@ -716,87 +694,64 @@ static void wsg_axis_soft_limit_check(struct wsg_axis *ax)
         wsg_axis_soft_limit_stop(ax);
 }
 
-static void wsg_axis_advance(struct wsg_axis *ax, double dt)
+/* One step of a motion with a profile: the drive follows the profile's
+ * point, and the plant says whether the fingers got there. Returns 1 when
+ * the plant was stepped. */
+static int wsg_axis_advance(struct wsg_axis *ax, double dt)
 {
     struct wsg_motion *m = &ax->motion;
     /* Homing's direction is its own: a homing that starts at its end stop
      * has a profile of length 0, with no direction to speak of. */
     double dir = m->kind == WSG_MOTION_HOMING ? m->nominal : m->prof.dir;
-    double x, v, x_block = 0.0, end;
+    double x, v;
     double f = m->kind == WSG_MOTION_SNAP ? ax->clamp_force : ax->force_limit;
+    struct wsg_drive d;
+    struct wsg_fingers o;
     int over;
 
     m->prof.t += dt;
     over = wsg_profile_eval(&m->prof, &x, &v);
     if (wsg_axis_soft_limit_hit(ax, x, v))
-        return;
+        return 0;
     /* The part, the obstacle: the first one the fingers reach blocks them
-     * where the force limit is reached. */
-    if (wsg_axis_next_block(ax, dir, f, &x_block) &&
-        (dir < 0 ? x <= x_block + WSG_AXIS_EPS
-                 : x >= x_block - WSG_AXIS_EPS)) {
-        ax->width = x_block;
-        ax->force = m->kind == WSG_MOTION_HOMING ? 0.0 : f;
+     * where the force limit is reached. The mechanical end stop is
+     * homing's goal; any other motion only meets it when a wrong reference
+     * put its target beyond it, or a grasp whose clamping travel reaches
+     * past it (a block like any other, which the grasping window judges). */
+    d = wsg_axis_drive(ax, WSG_DRIVE_MOVE, dir, f);
+    d.x = x;
+    d.v = v;
+    d.end =
+        over && (m->kind == WSG_MOTION_HOMING || m->kind == WSG_MOTION_GRASP);
+    o = wsg_axis_drive_step(ax, &d, dt);
+    ax->width = o.width;
+    if (o.blocked) {
+        ax->force = m->kind == WSG_MOTION_HOMING ? 0.0 : o.force;
         wsg_axis_blocked(ax);
-        return;
+        return 1;
     }
-    /* The mechanical end stop: homing's goal; any other motion only meets
-     * it when a wrong reference put its target beyond it. */
-    end = wsg_axis_end_stop(ax, dir);
-    /* A grasp whose clamping travel reaches past the end stop finds the
-     * fingers meeting it (or the stroke's end): a block like any other,
-     * which the grasping window judges. */
-    if ((over &&
-         (m->kind == WSG_MOTION_HOMING ||
-          (m->kind == WSG_MOTION_GRASP && fabs(x - end) <= WSG_AXIS_EPS))) ||
-        (dir < 0 ? x < end - WSG_AXIS_EPS : x > end + WSG_AXIS_EPS)) {
-        ax->width = end;
-        ax->force = m->kind == WSG_MOTION_HOMING ? 0.0 : f;
-        wsg_axis_blocked(ax);
-        return;
-    }
-    ax->width = x;
-    ax->speed = v;
-    ax->force = wsg_axis_contact_force(ax, x);
-    if (over)
+    ax->speed = o.speed;
+    ax->force = o.force;
+    /* Arrived when the profile is over and the fingers stand (a plant
+     * with inertia lets them settle first). */
+    if (over && o.speed == 0.0)
         wsg_axis_arrived(ax);
+    return 1;
 }
 
-/* Where fingers that speed mode pushes in direction dir with force f stand,
- * if something holds them (*x). A part that reaches them stands where f
- * squeezes it, so a new force limit (or a part that changed) moves them
- * there at once, unless the obstacle on the way or the end stop holds them
- * first; the obstacle and the end stop hold them only where they are.
- * Unlike wsg_axis_block_at's clamp, which holds the force it blocked with,
- * speed mode pushes with the force limit of the moment. */
+/* Where fingers that speed mode pushes in direction dir with force f
+ * stand, if something holds them (*x): the plant's PUSH. */
 static int wsg_axis_push_at(const struct wsg_axis *ax, double dir, double f,
                             double *x)
 {
-    double w = ax->width, ow = wsg_axis_rep(ax, ax->obstacle_width);
-    double end = wsg_axis_end_stop(ax, dir);
+    struct wsg_drive d = wsg_axis_drive(ax, WSG_DRIVE_PUSH, dir, f);
+    struct wsg_fingers o;
 
-    if (dir < 0 && ax->part &&
-        wsg_axis_rep(ax, ax->part_width) >= w - WSG_AXIS_EPS) {
-        double p =
-            wsg_clamp(wsg_axis_squeezed(ax, f), wsg_axis_end_stop(ax, -1.0),
-                      wsg_axis_end_stop(ax, 1.0));
-        /* The obstacle is rigid either way: the fingers do not pass it,
-         * squeezing further or pushed back by the part. */
-        if (ax->obstacle && ow >= fmin(p, w) - WSG_AXIS_EPS &&
-            ow <= fmax(p, w) + WSG_AXIS_EPS)
-            p = ow;
-        *x = p;
-        return 1;
-    }
-    if (ax->obstacle && fabs(w - ow) <= WSG_AXIS_EPS) {
-        *x = ow;
-        return 1;
-    }
-    if (fabs(w - end) <= WSG_AXIS_EPS) {
-        *x = end;
-        return 1;
-    }
-    return 0;
+    d.x = wsg_axis_end_stop(ax, dir);
+    o = wsg_axis_sense(ax, &d);
+
+    *x = o.width;
+    return o.blocked;
 }
 
 /* Standing fingers whose set speed points into a block right at them (a
@@ -804,12 +759,9 @@ static int wsg_axis_push_at(const struct wsg_axis *ax, double dir, double f,
  * a moving one would on its next step. */
 static int wsg_axis_at_block(const struct wsg_axis *ax, double dir, double f)
 {
-    double x_block;
+    struct wsg_drive d = wsg_axis_drive(ax, WSG_DRIVE_AT, dir, f);
 
-    if (wsg_axis_next_block(ax, dir, f, &x_block) &&
-        fabs(x_block - ax->width) <= WSG_AXIS_EPS)
-        return 1;
-    return fabs(ax->width - wsg_axis_end_stop(ax, dir)) <= WSG_AXIS_EPS;
+    return wsg_axis_sense(ax, &d).blocked;
 }
 
 static void wsg_axis_push(struct wsg_axis *ax, double dir)
@@ -840,13 +792,13 @@ static void wsg_axis_speed_settle(struct wsg_axis *ax)
         wsg_axis_push(ax, d);
     if (ax->push_dir) {
         if (!wsg_axis_push_at(ax, d, f, &x))
-            x = ax->width; /* cannot happen: a block at them holds them */
+            x = ax->width; /* a block at them holds them, or they stand */
         if (wsg_axis_soft_limit_hit(ax, x, x - ax->width))
             return;
         ax->width = x;
         ax->force = f;
     } else if (ax->speed == 0.0) {
-        ax->force = wsg_axis_contact_force(ax, ax->width);
+        ax->force = wsg_axis_free_force(ax);
     }
 }
 
@@ -855,13 +807,15 @@ static void wsg_axis_speed_settle(struct wsg_axis *ax)
  * it), and the fingers stop at the first block as any motion does. They
  * push into it if the set speed points there (decelerating the other way,
  * they just stand). */
-static void wsg_axis_speed_advance(struct wsg_axis *ax, double dt)
+static int wsg_axis_speed_advance(struct wsg_axis *ax, double dt)
 {
     double v0 = ax->speed, vs = ax->motion.speed, a = ax->cfg.max_acc;
-    double dv = vs - v0, v1, s, x, dir, x_block, end;
+    double dv = vs - v0, v1, s, x, dir;
+    struct wsg_drive d;
+    struct wsg_fingers o;
 
     if (ax->push_dir || (v0 == 0.0 && vs == 0.0))
-        return;
+        return 0;
     if (fabs(dv) > a * dt) {
         v1 = v0 + (dv > 0 ? a : -a) * dt;
         s = 0.5 * (v0 + v1) * dt;
@@ -872,28 +826,26 @@ static void wsg_axis_speed_advance(struct wsg_axis *ax, double dt)
     }
     ax->speed = v1;
     if (s == 0.0)
-        return; /* turned round within the step */
+        return 0; /* turned round within the step */
     x = ax->width + s;
     dir = wsg_axis_sign(s);
     if (wsg_axis_soft_limit_hit(ax, x, s))
-        return;
-    end = wsg_axis_end_stop(ax, dir);
-    if (wsg_axis_next_block(ax, dir, ax->force_limit, &x_block) &&
-        (dir < 0 ? x <= x_block + WSG_AXIS_EPS : x >= x_block - WSG_AXIS_EPS))
-        x = x_block;
-    else if (dir < 0 ? x <= end : x >= end)
-        x = end;
-    else {
-        ax->width = x;
-        ax->force = wsg_axis_contact_force(ax, x);
-        return;
+        return 0;
+    d = wsg_axis_drive(ax, WSG_DRIVE_SPEED, dir, ax->force_limit);
+    d.x = x;
+    d.v = v1;
+    o = wsg_axis_drive_step(ax, &d, dt);
+    ax->width = o.width;
+    if (!o.blocked) {
+        ax->force = o.force;
+        return 1;
     }
-    ax->width = x;
     ax->speed = 0.0;
     if (wsg_axis_sign(vs) == dir)
         wsg_axis_push(ax, dir);
     else
-        ax->force = wsg_axis_contact_force(ax, x);
+        ax->force = o.force;
+    return 1;
 }
 
 /* Speed mode stands still and steps would change nothing: at set speed 0,
@@ -908,8 +860,7 @@ static int wsg_axis_speed_steady(const struct wsg_axis *ax)
                fabs(x - ax->width) <= WSG_AXIS_EPS &&
                ax->force == ax->force_limit;
     return ax->speed == 0.0 && d == 0.0 &&
-           fabs(ax->force - wsg_axis_contact_force(ax, ax->width)) <=
-               WSG_AXIS_EPS;
+           fabs(ax->force - wsg_axis_free_force(ax)) <= WSG_AXIS_EPS;
 }
 
 /* A clamping axis holds its block; if the block is gone the fingers snap on
@@ -917,11 +868,15 @@ static int wsg_axis_speed_steady(const struct wsg_axis *ax)
 static void wsg_axis_hold(struct wsg_axis *ax)
 {
     struct wsg_motion snap;
-    double x_block;
+    struct wsg_drive d =
+        wsg_axis_drive(ax, WSG_DRIVE_CLAMP, ax->clamp_dir, ax->clamp_force);
+    struct wsg_fingers o;
 
-    if (wsg_axis_block_at(ax, ax->clamp_dir, ax->clamp_force, &x_block)) {
-        ax->width = x_block;
-        ax->force = ax->clamp_force;
+    d.x = ax->clamp_target;
+    o = wsg_axis_sense(ax, &d);
+    if (o.blocked) {
+        ax->width = o.width;
+        ax->force = o.force; /* the built-in plant's: the clamp's force */
         return;
     }
     if (ax->grasp_state == WSG_GS_HOLDING) {
@@ -990,12 +945,13 @@ static void wsg_axis_thermal(struct wsg_axis *ax, double dt)
 static void wsg_axis_limit_clamp(struct wsg_axis *ax)
 {
     double old = ax->clamp_force, f = ax->cfg.nom_force;
+    struct wsg_drive d;
 
     if (!ax->clamping || ax->overdrive || old <= f)
         return;
-    if (ax->clamp_dir < 0 && ax->part &&
-        fabs(ax->width - wsg_axis_squeezed(ax, old)) <= WSG_AXIS_EPS)
-        ax->width = wsg_axis_squeezed(ax, f);
+    d = wsg_axis_drive(ax, WSG_DRIVE_RELAX, ax->clamp_dir, f);
+    d.force_was = old;
+    ax->width = wsg_axis_sense(ax, &d).width;
     ax->clamp_force = f;
     ax->force = f;
 }
@@ -1013,22 +969,49 @@ void wsg_axis_settle(struct wsg_axis *ax)
     wsg_axis_soft_limit_check(ax);
 }
 
+/* A step of the plant with the fingers standing: a clamp holds towards
+ * its target with its force, speed mode pushes with the force limit, or
+ * the motor is off. */
+static void wsg_axis_hold_step(struct wsg_axis *ax, double dt)
+{
+    struct wsg_plant *p = wsg_axis_plant_of(ax);
+    struct wsg_drive d = wsg_axis_drive(ax, WSG_DRIVE_OFF, 0.0, 0.0);
+
+    if (ax->clamping) {
+        d = wsg_axis_drive(ax, WSG_DRIVE_CLAMP, ax->clamp_dir,
+                           ax->clamp_force);
+        d.x = ax->clamp_target;
+    } else if (ax->motion.kind == WSG_MOTION_SPEED && ax->push_dir) {
+        d = wsg_axis_drive(ax, WSG_DRIVE_PUSH, ax->push_dir, ax->force_limit);
+        d.x = wsg_axis_end_stop(ax, ax->push_dir);
+    }
+    p->ops->step(p, &d, dt);
+}
+
 void wsg_axis_step(struct wsg_axis *ax)
 {
     double dt = ax->cfg.step_us * 1e-6;
 
+    int stepped = 0;
+
     ax->time_us += ax->cfg.step_us;
     wsg_axis_settle(ax);
     if (ax->motion.kind == WSG_MOTION_SPEED)
-        wsg_axis_speed_advance(ax, dt);
+        stepped = wsg_axis_speed_advance(ax, dt);
     else if (ax->motion.kind != WSG_MOTION_NONE)
-        wsg_axis_advance(ax, dt);
+        stepped = wsg_axis_advance(ax, dt);
+    /* The world moves on while the fingers stand (a plant with physics):
+     * the drive holds a clamp or a push, or is off. One plant step each
+     * model step, whichever path took it. */
+    if (!stepped)
+        wsg_axis_hold_step(ax, dt);
     wsg_axis_thermal(ax, dt);
 }
 
 int wsg_axis_idle(const struct wsg_axis *ax)
 {
-    double x_block;
+    struct wsg_drive d;
+    struct wsg_fingers o;
 
     if (ax->req_fast_stop || ax->req_ack || ax->req_stop ||
         ax->req_motion.kind || ax->req_cancelled.kind)
@@ -1037,10 +1020,17 @@ int wsg_axis_idle(const struct wsg_axis *ax)
             ? !wsg_axis_speed_steady(ax)
             : ax->motion.kind != WSG_MOTION_NONE)
         return 0;
-    if (ax->clamping &&
-        (!wsg_axis_block_at(ax, ax->clamp_dir, ax->clamp_force, &x_block) ||
-         fabs(x_block - ax->width) > WSG_AXIS_EPS))
+    /* A plant with physics moves on its own: never idle. */
+    if (ax->plant)
         return 0;
+    if (ax->clamping) {
+        d = wsg_axis_drive(ax, WSG_DRIVE_CLAMP, ax->clamp_dir,
+                           ax->clamp_force);
+        d.x = ax->clamp_target;
+        o = wsg_axis_sense(ax, &d);
+        if (!o.blocked || fabs(o.width - ax->width) > WSG_AXIS_EPS)
+            return 0;
+    }
     /* Faults to apply, a drive still warming or cooling. */
     if ((ax->faults | ax->thermal_faults) != ax->faults_seen ||
         fabs(wsg_axis_heat_target(ax) - ax->temperature) > 0.01)
@@ -1179,27 +1169,26 @@ int wsg_axis_soft_limits(const struct wsg_axis *ax, double *minus,
 
 int wsg_axis_part(const struct wsg_axis *ax, double *width, double *stiffness)
 {
-    if (!ax->part)
+    if (!ax->builtin.part)
         return 0;
-    *width = ax->part_width;
-    *stiffness = ax->part_stiffness;
+    *width = ax->builtin.part_width;
+    *stiffness = ax->builtin.part_stiffness;
     return 1;
 }
 
 int wsg_axis_contact(const struct wsg_axis *ax, int finger,
                      struct wsg_contact *c)
 {
+    const struct wsg_plant *p;
+    struct wsg_drive d;
+
     if (finger != 0 && finger != 1)
         return -EINVAL;
-    memset(c, 0, sizeof *c);
-    /* The built-in world is symmetric: a part held between the fingers
-     * presses on both pads with the grip force, centred. */
-    if (ax->part && ax->force > 0.0 &&
-        ax->width < wsg_axis_rep(ax, ax->part_width)) {
-        c->force = ax->force;
-        c->w = ax->patch_w > 0.0 ? ax->patch_w : WSG_AXIS_PATCH_MM;
-        c->h = ax->patch_h > 0.0 ? ax->patch_h : WSG_AXIS_PATCH_MM;
-    }
+    /* The plant knows the pads: the built-in one's part presses on both
+     * with the grip force, a physics plant's contacts where they are. */
+    d = wsg_axis_drive(ax, WSG_DRIVE_OFF, 0.0, 0.0);
+    p = wsg_axis_plant_c(ax);
+    p->ops->contact(p, &d, finger, c);
     return 0;
 }
 
@@ -1210,9 +1199,9 @@ int wsg_axis_grasp_collided(const struct wsg_axis *ax)
 
 int wsg_axis_obstacle(const struct wsg_axis *ax, double *width)
 {
-    if (!ax->obstacle)
+    if (!ax->builtin.obstacle)
         return 0;
-    *width = ax->obstacle_width;
+    *width = ax->builtin.obstacle_width;
     return 1;
 }
 
@@ -1451,28 +1440,29 @@ void wsg_axis_advance_idle(struct wsg_axis *ax, uint64_t nsteps)
 void wsg_axis_set_part(struct wsg_axis *ax, double width, double stiffness)
 {
     if (width < 0 || isnan(width)) {
-        ax->part = 0;
+        ax->builtin.part = 0;
         return;
     }
-    ax->part = 1;
-    ax->part_width = width;
-    ax->part_stiffness = stiffness > 0 ? stiffness : ax->cfg.part_stiffness;
+    ax->builtin.part = 1;
+    ax->builtin.part_width = width;
+    ax->builtin.part_stiffness =
+        stiffness > 0 ? stiffness : ax->cfg.part_stiffness;
 }
 
 void wsg_axis_set_part_patch(struct wsg_axis *ax, double w, double h)
 {
-    ax->patch_w = w > 0.0 ? w : WSG_AXIS_PATCH_MM;
-    ax->patch_h = h > 0.0 ? h : WSG_AXIS_PATCH_MM;
+    ax->builtin.patch_w = w > 0.0 ? w : WSG_AXIS_PATCH_MM;
+    ax->builtin.patch_h = h > 0.0 ? h : WSG_AXIS_PATCH_MM;
 }
 
 void wsg_axis_set_obstacle(struct wsg_axis *ax, double width)
 {
     if (width < 0 || isnan(width)) {
-        ax->obstacle = 0;
+        ax->builtin.obstacle = 0;
         return;
     }
-    ax->obstacle = 1;
-    ax->obstacle_width = width;
+    ax->builtin.obstacle = 1;
+    ax->builtin.obstacle_width = width;
 }
 
 void wsg_axis_set_fault(struct wsg_axis *ax, uint32_t fault, int on)
@@ -1482,4 +1472,19 @@ void wsg_axis_set_fault(struct wsg_axis *ax, uint32_t fault, int on)
         ax->faults |= fault;
     else
         ax->faults &= ~fault;
+}
+
+void wsg_axis_set_plant(struct wsg_axis *ax, struct wsg_plant *p)
+{
+    struct wsg_drive d;
+
+    ax->plant = p;
+    /* The firmware counts from where this plant's fingers stand. */
+    d = wsg_axis_drive(ax, WSG_DRIVE_OFF, 0.0, 0.0);
+    ax->width = wsg_axis_sense(ax, &d).width;
+}
+
+struct wsg_plant *wsg_axis_plant(struct wsg_axis *ax)
+{
+    return wsg_axis_plant_of(ax);
 }

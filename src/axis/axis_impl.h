@@ -9,6 +9,7 @@
 #ifndef WSG_AXIS_IMPL_H
 #define WSG_AXIS_IMPL_H
 
+#include "plant_builtin.h"
 #include "wsg/axis.h"
 
 enum wsg_motion_kind {
@@ -81,12 +82,11 @@ struct wsg_axis {
     int soft_limits;
     double soft_minus, soft_plus;
 
-    /* The world: a part between the fingers. */
-    int part;
-    double part_width, part_stiffness;
-    double patch_w, patch_h; /* mm, where the part touches each pad */
-    int obstacle; /* something rigid stands in the way */
-    double obstacle_width;
+    /* The plant the drive moves: plant, or the built-in one held here when
+     * plant is NULL (resolved at each use, so that the struct stays
+     * movable). */
+    struct wsg_plant *plant;
+    struct wsg_plant_builtin builtin;
     double ref_offset;       /* reported width - physical width: nonzero after
                                 homing into an obstacle */
     uint32_t faults;         /* injected fault flags (WSG_FAULTS) */

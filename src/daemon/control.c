@@ -38,10 +38,13 @@
 #include "peer.h"
 #include "state.h"
 #include "wsg/gcl.h"
+#include "wsg/plant.h"
 
 #define WSG_CTL_READ_CHUNK 1024u
 #define WSG_CTL_REPLY_MAX  2048u
 #define WSG_CTL_ARGS_MAX   4
+/* "object box W D H MASS FRICTION" alone takes more. */
+#define WSG_CTL_OBJECT_ARGS_MAX 7
 /* "time step" at most one hour at once: the loop is blocked meanwhile. */
 #define WSG_CTL_STEP_MS_MAX 3600000.0
 
@@ -125,10 +128,16 @@ static int parse_num(const char *s, double *v)
 static void cmd_part(struct ctl_ctx *c, int argc, char **argv)
 {
     struct wsg_axis *ax = wsg_device_axis(&c->ctl->cur->dev);
+    struct wsg_plant *pl = wsg_axis_plant(ax);
     struct wsg_axis_range r =
         wsg_axis_config_range(wsg_axis_cfg(ax), WSG_AXIS_WIDTH);
     double width, stiffness = 0.0;
 
+    if (strcmp(pl->ops->name, "builtin") != 0) {
+        reply(c, "error part: the %s plant's world is objects (object)",
+              pl->ops->name);
+        return;
+    }
     if (argc == 2 && strcmp(argv[1], "none") == 0) {
         wsg_axis_set_part(ax, -1.0, 0.0);
         changed(c, "part none");
@@ -153,13 +162,117 @@ static void cmd_part(struct ctl_ctx *c, int argc, char **argv)
     changed(c, "part %g %g", width, stiffness);
 }
 
+/* object box W D H | cylinder D L | sphere D [MASS [FRICTION]] | none:
+ * a shape between the fingers, for a plant with physics (--physics
+ * mujoco). Sizes in mm, mass in kg (default 0.1), friction (default 1). */
+static void cmd_object(struct ctl_ctx *c, int argc, char **argv)
+{
+    static const char usage[] =
+        "error usage: object box W D H | cylinder D L | sphere D "
+        "[MASS [FRICTION]] | none";
+    struct wsg_plant *p = wsg_axis_plant(wsg_device_axis(&c->ctl->cur->dev));
+    struct wsg_object o;
+    int n, i, r;
+
+    memset(&o, 0, sizeof o);
+    o.mass = 0.1;
+    o.friction = 1.0;
+    if (argc < 2) {
+        reply(c, "%s", usage);
+        return;
+    }
+    if (strcmp(argv[1], "none") == 0 && argc == 2)
+        n = 0, o.kind = WSG_OBJECT_NONE;
+    else if (strcmp(argv[1], "box") == 0)
+        n = 3, o.kind = WSG_OBJECT_BOX;
+    else if (strcmp(argv[1], "cylinder") == 0)
+        n = 2, o.kind = WSG_OBJECT_CYLINDER;
+    else if (strcmp(argv[1], "sphere") == 0)
+        n = 1, o.kind = WSG_OBJECT_SPHERE;
+    else {
+        reply(c, "%s", usage);
+        return;
+    }
+    if (argc < 2 + n || argc > 4 + n) {
+        reply(c, "%s", usage);
+        return;
+    }
+    for (i = 0; i < n; i++)
+        if (!parse_num(argv[2 + i], &o.size[i]) || o.size[i] <= 0.0 ||
+            o.size[i] > 1000.0) {
+            reply(c, "error object: sizes must be numbers of mm in 0..1000");
+            return;
+        }
+    if ((argc > 2 + n && (!parse_num(argv[2 + n], &o.mass) || o.mass <= 0.0 ||
+                          o.mass > 100.0)) ||
+        (argc > 3 + n && (!parse_num(argv[3 + n], &o.friction) ||
+                          o.friction < 0.0 || o.friction > 10.0))) {
+        reply(c, "error object: MASS must be in 0..100 kg, FRICTION in "
+                 "0..10");
+        return;
+    }
+    r = p->ops->place(p, &o);
+    if (r == -ENOTSUP) {
+        reply(c,
+              "error object: the %s plant has no objects (--physics "
+              "mujoco has; here: part)",
+              p->ops->name);
+        return;
+    }
+    if (r < 0) {
+        reply(c, "error object: %s", strerror(-r));
+        return;
+    }
+    if (o.kind == WSG_OBJECT_NONE)
+        changed(c, "object none");
+    else
+        changed(c, "object %s %g %g %g %g %g", argv[1], o.size[0], o.size[1],
+                o.size[2], o.mass, o.friction);
+}
+
+/* pull N: pull on the object out of the fingers (0 stops pulling). */
+static void cmd_pull(struct ctl_ctx *c, int argc, char **argv)
+{
+    struct wsg_plant *p = wsg_axis_plant(wsg_device_axis(&c->ctl->cur->dev));
+    double n;
+    int r;
+
+    if (argc != 2 || !parse_num(argv[1], &n) || n < 0.0 || n > 10000.0) {
+        reply(c, "error usage: pull N (0..10000 newtons)");
+        return;
+    }
+    r = p->ops->pull(p, n);
+    if (r == -ENOTSUP) {
+        reply(c,
+              "error pull: the %s plant has no objects (--physics mujoco "
+              "has)",
+              p->ops->name);
+        return;
+    }
+    if (r == -ENOENT) {
+        reply(c, "error pull: no object placed");
+        return;
+    }
+    if (r < 0) {
+        reply(c, "error pull: %s", strerror(-r));
+        return;
+    }
+    changed(c, "pull %g", n);
+}
+
 static void cmd_obstacle(struct ctl_ctx *c, int argc, char **argv)
 {
     struct wsg_axis *ax = wsg_device_axis(&c->ctl->cur->dev);
+    struct wsg_plant *pl = wsg_axis_plant(ax);
     struct wsg_axis_range r =
         wsg_axis_config_range(wsg_axis_cfg(ax), WSG_AXIS_WIDTH);
     double width;
 
+    if (strcmp(pl->ops->name, "builtin") != 0) {
+        reply(c, "error obstacle: the %s plant's world is objects (object)",
+              pl->ops->name);
+        return;
+    }
     if (argc != 2) {
         reply(c, "error usage: obstacle WIDTH | obstacle none");
         return;
@@ -542,8 +655,8 @@ static void cmd_help(struct ctl_ctx *c, int argc, char **argv);
 
 static void run_line(struct ctl_ctx *c, char *line)
 {
-    char *argv[WSG_CTL_ARGS_MAX];
-    int argc = 0;
+    char *argv[WSG_CTL_OBJECT_ARGS_MAX];
+    int argc = 0, max = WSG_CTL_ARGS_MAX;
     char *p = line;
 
     for (;;) {
@@ -551,7 +664,9 @@ static void run_line(struct ctl_ctx *c, char *line)
             p++;
         if (!*p)
             break;
-        if (argc == WSG_CTL_ARGS_MAX) {
+        if (argc == 1 && strcmp(argv[0], "object") == 0)
+            max = WSG_CTL_OBJECT_ARGS_MAX;
+        if (argc == max) {
             reply(c, "error too many arguments");
             return;
         }
@@ -588,6 +703,9 @@ static const struct ctl_command {
 } ctl_commands[] = {
     {"part", cmd_part, 1, "part WIDTH [STIFFNESS]|none"},
     {"obstacle", cmd_obstacle, 1, "obstacle WIDTH|none"},
+    {"object", cmd_object, 1,
+     "object box W D H|cylinder D L|sphere D [MASS [FRICTION]]|none"},
+    {"pull", cmd_pull, 1, "pull N"},
     {"fault", cmd_fault, 1, "fault NAME on|off"},
     {"time", cmd_time, 1, "time [scale X|pause|step MS|resume]"},
     {"state", cmd_state, 0, "state"},

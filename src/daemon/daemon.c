@@ -13,6 +13,7 @@
 #define _GNU_SOURCE /* signalfd */
 
 #include "daemon.h"
+
 #include "notify.h"
 
 #include <errno.h>
@@ -24,6 +25,8 @@
 #include <sys/resource.h>
 #include <sys/signalfd.h>
 #include <unistd.h>
+
+#include "wsg/plant.h"
 
 /* Descriptors a gripper can hold with every interface open and no client:
  * TCP and UDP sockets, the pty's master and inotify, a CAN socket. */
@@ -136,6 +139,57 @@ static int raise_fd_limit(const struct wsg_options *o)
     return 0;
 }
 
+/* --physics mujoco: the gripper's fingers move in a MuJoCo scene, the
+ * model's own or --scene's, on --scene-fingers' joints. */
+static int gripper_plant(struct wsg_gripper *g, const struct wsg_options *o)
+{
+    char err[512], left[64], right[64];
+    const char *l = NULL, *r = NULL, *comma;
+    int rc;
+
+    if (!o->physics || strcmp(o->physics, "builtin") == 0) {
+        if (o->scene || o->scene_fingers) {
+            fprintf(stderr, "wsgemu: --scene and --scene-fingers need "
+                            "--physics mujoco\n");
+            return -EINVAL;
+        }
+        return 0;
+    }
+    if (strcmp(o->physics, "mujoco") != 0) {
+        fprintf(stderr,
+                "wsgemu: --physics: unknown plant '%s' (known: builtin, "
+                "mujoco)\n",
+                o->physics);
+        return -EINVAL;
+    }
+    if (o->scene_fingers) {
+        comma = strchr(o->scene_fingers, ',');
+        if (!comma || comma == o->scene_fingers || !comma[1] ||
+            strchr(comma + 1, ',') ||
+            (size_t)(comma - o->scene_fingers) >= sizeof left ||
+            strlen(comma + 1) >= sizeof right) {
+            fprintf(stderr, "wsgemu: --scene-fingers: want LEFT,RIGHT (two "
+                            "joint names)\n");
+            return -EINVAL;
+        }
+        memcpy(left, o->scene_fingers, (size_t)(comma - o->scene_fingers));
+        left[comma - o->scene_fingers] = '\0';
+        strcpy(right, comma + 1);
+        l = left;
+        r = right;
+    }
+    rc = wsg_plant_mujoco_open(&g->plant,
+                               wsg_axis_cfg(wsg_device_axis(&g->dev)),
+                               o->scene, l, r, err, sizeof err);
+    if (rc < 0) {
+        fprintf(stderr, "wsgemu: --physics mujoco: %s\n", err);
+        g->plant = NULL;
+        return rc;
+    }
+    wsg_axis_set_plant(wsg_device_axis(&g->dev), g->plant);
+    return 0;
+}
+
 static int open_gripper(struct wsg_daemon *d, struct wsg_gripper *g,
                         unsigned index)
 {
@@ -159,6 +213,9 @@ static int open_gripper(struct wsg_daemon *d, struct wsg_gripper *g,
     if (o.initial_part.given)
         wsg_axis_set_part(wsg_device_axis(&g->dev), o.initial_part.value,
                           o.initial_part_stiffness);
+    r = gripper_plant(g, &o);
+    if (r < 0)
+        return r;
     /* The web page's log view reads the same lines (log.h). */
     if (d->log.f || d->opt.web_enabled)
         wsg_log_attach(&d->log, &g->tap, &g->dev,

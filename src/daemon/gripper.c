@@ -13,6 +13,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "wsg/plant.h"
+
 /* Mixed with the gripper's number: any fixed value does. */
 #define WSG_GRIPPER_SEED 0x5753473530ull /* "WSG50" */
 
@@ -197,6 +199,11 @@ void wsg_gripper_fini(struct wsg_gripper *g)
         wsg_runner_forget(g->runner, g);
     wsg_script_free(g->script);
     g->script = NULL;
+    if (g->plant) {
+        wsg_axis_set_plant(wsg_device_axis(&g->dev), NULL);
+        g->plant->ops->destroy(g->plant);
+        g->plant = NULL;
+    }
     if (!g->delay)
         return;
     for (i = 0; i < WSG_TRANSPORT_MAX; i++)

@@ -55,6 +55,8 @@ struct wsg_gripper {
     struct wsg_runner *runner;
     struct wsg_gripper *next_ready; /* the runner's list */
     uint8_t ready;
+    /* --physics mujoco: the plant its fingers move in (NULL: built-in). */
+    struct wsg_plant *plant;
 };
 
 /* Delay every packet of g by ms plus a draw of 0..jitter_ms (simulated

@@ -586,6 +586,27 @@ static const struct wsg_setting settings[] = {
      .arg = "NAME",
      .help = "wsg50 (default), wsg50-210, wsg32,\n"
              "wsg25"},
+    {.name = "physics",
+     .type = WSG_SETTING_TEXT,
+     .at = WSG_AT(physics),
+     .section = WSG_SECTION_GRIPPER,
+     .arg = "PLANT",
+     .help = "builtin (default) or mujoco: the\n"
+             "world the fingers move in"},
+    {.name = "scene",
+     .type = WSG_SETTING_TEXT,
+     .at = WSG_AT(scene),
+     .section = WSG_SECTION_GRIPPER,
+     .arg = "FILE",
+     .help = "MJCF scene for --physics mujoco\n"
+             "(default the model's own)"},
+    {.name = "scene-fingers",
+     .type = WSG_SETTING_TEXT,
+     .at = WSG_AT(scene_fingers),
+     .section = WSG_SECTION_GRIPPER,
+     .arg = "LEFT,RIGHT",
+     .help = "the scene's two finger slide joints\n"
+             "(default wsg_left,wsg_right)"},
     {.name = "acceleration",
      .type = WSG_SETTING_MODEL,
      .at = WSG_AT(acceleration),

@@ -93,12 +93,15 @@ struct wsg_options {
     uint32_t latency_ms;
     uint32_t latency_jitter_ms;
     uint32_t step_us;
-    const char *script_path; /* --script FILE: the startup script */
-    uint32_t script_memory;  /* --script-memory MiB */
-    const char *script_dir;  /* --script-dir DIR: the page's; NULL: none */
-    uint32_t script_quota;   /* --script-quota: bytes of uploaded scripts */
-    uint32_t script_files;   /* --script-files: scripts the page may hold */
-    const char *model;       /* NULL: the default model */
+    const char *script_path;   /* --script FILE: the startup script */
+    uint32_t script_memory;    /* --script-memory MiB */
+    const char *script_dir;    /* --script-dir DIR: the page's; NULL: none */
+    uint32_t script_quota;     /* --script-quota: bytes of uploaded scripts */
+    uint32_t script_files;     /* --script-files: scripts the page may hold */
+    const char *model;         /* NULL: the default model */
+    const char *physics;       /* --physics: NULL or "builtin", "mujoco" */
+    const char *scene;         /* --scene FILE.xml: NULL the built-in */
+    const char *scene_fingers; /* --scene-fingers LEFT,RIGHT */
     /* The web page's settings, the model's defaults unless given. */
     struct wsg_model_value acceleration; /* mm/s^2 */
     struct wsg_model_value force_limit;  /* N */
