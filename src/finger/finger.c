@@ -292,8 +292,9 @@ void wsg_finger_attach(struct wsg_fingers *fs, int i,
 {
     struct wsg_finger *f = &fs->f[i];
 
+    /* At once, not with the update: whoever detaches may free ctx now. */
     f->link = link;
-    f->link_ctx = ctx;
+    f->link_ctx = link ? ctx : NULL;
     f->data_size =
         data_size > WSG_FINGER_DATA_MAX ? WSG_FINGER_DATA_MAX : data_size;
     f->req_kind = link ? WSG_FINGER_DEVICE : WSG_FINGER_GENERIC;
