@@ -14,7 +14,10 @@
  *   63h E_NO_SENSOR), `finger 0 cells` gives the pad's frame; `state`
  *   carries the fingers;
  * - a config file's finger1 key fits a finger as the option does, and a
- *   kind that is none of the five is refused at start.
+ *   kind that is none of the five is refused at start;
+ * - the example device models (packaging/fingers) under the example
+ *   script: the tip's taxels and the SPI sensor's value follow the force
+ *   held (argv[2]: the source tree).
  */
 #include "check.h"
 #include "emu.h"
@@ -187,6 +190,71 @@ static void test_config(const char *exe)
     CHECK_EQ(emu_run(exe, bad, EMU_REPLY_MS, NULL, 0, NULL, 0), 2);
 }
 
+/* The example device models driven by the example script, as the public
+ * scripts drive theirs: B0h answers the tip's "x", its 5 x 5 taxels (the
+ * force on each in mN: the default 10 mm patch covers the tip, 4 mm^2 of
+ * its 100 each) and the SPI sensor's 42 and force in 0.01 N. */
+static void test_devices(const char *exe, const char *src)
+{
+    char tip[512], spi[512], script[512];
+    const char *dargs[] = {
+        "--tcp",     "127.0.0.1:0", "--control",    "127.0.0.1:0",
+        "--finger0", tip,           "--finger1",    spi,
+        "--script",  script,        "--time-scale", "10",
+        NULL};
+    struct emu e;
+    struct emu_client c;
+    struct wsg_client_frame f;
+    struct ctl k;
+    uint8_t home = 1, g[8], p[512];
+    float force;
+    size_t n, i;
+    unsigned want;
+
+    snprintf(tip, sizeof tip, "device:%s/packaging/fingers/tactile_tip.lua",
+             src);
+    snprintf(spi, sizeof spi, "device:%s/packaging/fingers/spi_sensor.lua",
+             src);
+    snprintf(script, sizeof script, "%s/packaging/fingers/tip_reader.lua",
+             src);
+    REQUIRE(emu_start(&e, exe, dargs) == 0);
+    REQUIRE(ctl_open(&k, &e) == 0);
+    REQUIRE(emu_open(&c, &e, &emu_tcp) == 0);
+    CHECK_EQ(emu_request(&c, WSG_CMD_HOMING, &home, 1, NULL, EMU_REPLY_MS),
+             WSG_E_CMD_PENDING);
+    CHECK_EQ(emu_recv_id(&c, WSG_CMD_HOMING, &f, EMU_REPLY_MS), 1);
+    CMD_OK(&k, "part 40");
+    CHECK_EQ(emu_request(&c, WSG_CMD_GRASP, g, emu_grasp_payload(g, 40, 50),
+                         NULL, EMU_REPLY_MS),
+             WSG_E_CMD_PENDING);
+    CHECK_EQ(emu_recv_id(&c, WSG_CMD_GRASP, &f, EMU_REPLY_MS), 1);
+    CHECK_EQ(f.status, WSG_E_SUCCESS);
+    REQUIRE(emu_get_float(&c, WSG_CMD_GET_FORCE, &force) == 0);
+    /* the script's power cycle and polling take under a second */
+    CHECK_EQ(emu_request(&c, 0xB0, NULL, 0, &f, EMU_REPLY_MS), WSG_E_SUCCESS);
+    REQUIRE(EMU_NPARAMS(&f) == 1 + 50 + 3);
+    memcpy(p, EMU_PARAMS(&f), 54);
+    CHECK_EQ(p[0], 1);
+    want = (unsigned)(force * 40.0 + 0.5);
+    for (i = 0; i < 25; i++)
+        CHECK_NEAR(wsg_get_u16(p + 1 + 2 * i), want, 1);
+    CHECK_EQ(p[51], 42);
+    CHECK_NEAR(wsg_get_u16(p + 52), force * 100.0, 1);
+    /* 71h: a generic finger with its UART set up; 73h: the model's data */
+    CHECK_EQ(emu_request(&c, 0x70, NULL, 0, &f, EMU_REPLY_MS), WSG_E_SUCCESS);
+    CHECK_EQ(EMU_PARAMS(&f)[0], WSG_FINGER_TYPE_GENERIC);
+    CHECK_EQ(wsg_get_u16(EMU_PARAMS(&f) + 1), 3);
+    CHECK_EQ(emu_request(&c, 0x73, NULL, 0, &f, EMU_REPLY_MS), WSG_E_SUCCESS);
+    CHECK_EQ(EMU_NPARAMS(&f), 3);
+    CHECK_EQ(EMU_PARAMS(&f)[0], 42);
+    CHECK_EQ(emu_request(&c, 0x61, NULL, 0, &f, EMU_REPLY_MS), WSG_E_SUCCESS);
+    CHECK(wsg_get_u16(EMU_PARAMS(&f)) & WSG_FF_UART);
+    (void)n;
+    emu_close(&c);
+    ctl_close(&k);
+    CHECK_EQ(emu_stop(&e), 0);
+}
+
 int main(int argc, char **argv)
 {
     const char *exe = emu_exe(argc, argv);
@@ -204,5 +272,7 @@ int main(int argc, char **argv)
     ctl_close(&k);
     CHECK_EQ(emu_stop(&e), 0);
     test_config(exe);
+    if (argc > 2)
+        test_devices(exe, argv[2]);
     TEST_EXIT();
 }
