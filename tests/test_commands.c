@@ -57,7 +57,7 @@ static void test_unknown_and_checksum(void)
 
     tdev_init(&t);
     CHECK_EQ(tdev_cmd(&t, 0x90, NULL, 0), WSG_E_CMD_UNKNOWN);
-    CHECK_EQ(tdev_cmd(&t, 0x60, NULL, 0), WSG_E_CMD_UNKNOWN);
+    CHECK_EQ(tdev_cmd(&t, 0x64, NULL, 0), WSG_E_CMD_UNKNOWN);
     CHECK_EQ(tdev_cmd(&t, 0xB0, NULL, 0), WSG_E_CMD_UNKNOWN);
     CHECK_EQ(tdev_last(&t)->plen, 0); /* no parameters with an error */
     /* a bad checksum: E_CHECKSUM_ERROR under the received ID */

@@ -21,6 +21,7 @@
 #include <stdint.h>
 
 #include "wsg/axis.h"
+#include "wsg/finger.h"
 #include "wsg/proto.h"
 
 enum wsg_stream_id {
@@ -126,6 +127,9 @@ struct wsg_device {
      * A power cycle (wsg_device_reset) keeps them: the script runs on. */
     uint32_t ext_flags;
     uint32_t last_tag; /* the session that sent the last packet; 0: none */
+    /* The finger interface (wsg/finger.h): updated after the axis in
+     * every step and settle. */
+    struct wsg_fingers fingers;
 };
 
 void wsg_device_init(struct wsg_device *d, const struct wsg_axis_config *cfg);
@@ -205,8 +209,13 @@ struct wsg_session *wsg_device_session(struct wsg_device *d, uint32_t tag);
 void wsg_device_send(struct wsg_device *d, struct wsg_session *s,
                      const uint8_t *pkt, size_t len);
 
-/* One model step; final results leave through lookup/send. */
+/* One model step, then the fingers' update; final results leave through
+ * lookup/send. */
 void wsg_device_step(struct wsg_device *d);
+/* Apply what was requested (a step of zero length): the axis's settle,
+ * then the fingers' update. Whoever changes the world or records a request
+ * outside a command settles with this. */
+void wsg_device_settle(struct wsg_device *d);
 /* Send the stream packets of s that are due at the device's time. */
 void wsg_device_poll_streams(struct wsg_device *d, struct wsg_session *s);
 /* The same for every streaming session. */

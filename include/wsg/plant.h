@@ -48,7 +48,7 @@ struct wsg_drive {
 };
 
 /* What sense tells. */
-struct wsg_fingers {
+struct wsg_plant_fingers {
     double width, speed, force;
     int blocked;
 };
@@ -76,7 +76,7 @@ struct wsg_plant_ops {
     void (*step)(struct wsg_plant *p, const struct wsg_drive *d, double dt);
     /* The fingers under drive d now (no time passes). */
     void (*sense)(const struct wsg_plant *p, const struct wsg_drive *d,
-                  struct wsg_fingers *out);
+                  struct wsg_plant_fingers *out);
     /* What finger 0 or 1's pad feels (wsg_axis_contact). */
     void (*contact)(const struct wsg_plant *p, const struct wsg_drive *d,
                     int finger, struct wsg_contact *c);

@@ -188,8 +188,19 @@ struct wsg_layout {
     WSG_FIELDS(WSG_F_BITS8("flags", WSG_NAMES("auto-update", "change-only")), \
                WSG_F_U16("period-ms", "ms"))
 
+/* The finger commands (later firmware): a finger index, or nothing for
+ * the finger the ID names (60h..63h finger 1, 70h..73h finger 2). */
+#define WSG_FINGER_INDEX WSG_FIELDS(WSG_F_U8("finger"))
+#define WSG_FINGER_INFO                                                       \
+    WSG_FIELDS(                                                               \
+        WSG_F_ENUM8("type", WSG_NAMES("none", "generic", "fmf", "dsa")),      \
+        WSG_F_U16("size", ""))
+#define WSG_FINGER_POWER                                                      \
+    WSG_FIELDS(WSG_F_ENUM8("power", WSG_NAMES("off", "on")))
+
 /*
- * The commands of the 2.2.0 command set plus Get Temperature (46h), in ID
+ * The commands of the 2.2.0 command set plus Get Temperature (46h) and the
+ * finger commands of later firmware (60h..63h, 70h..73h), in ID
  * order: X(ID, SYMBOL, HANDLER, NAME, MIN_LEN, MAX_LEN, FLAGS, REQUEST,
  * REPLY). SYMBOL makes WSG_CMD_<SYMBOL>; HANDLER names the emulator's
  * handler, wsg_cmd_<HANDLER> in src/cmd/commands.c; NAME is what logs and
@@ -295,7 +306,29 @@ struct wsg_layout {
                  WSG_F_F32("max-speed", "mm/s"),                              \
                  WSG_F_F32("min-acc", "mm/s2"),                               \
                  WSG_F_F32("max-acc", "mm/s2"), WSG_F_F32("min-force", "N"),  \
-                 WSG_F_F32("nom-force", "N"), WSG_F_F32("ovr-force", "N")))
+                 WSG_F_F32("nom-force", "N"), WSG_F_F32("ovr-force", "N")))   \
+    /* Two addressing styles share 60h..63h: nothing (4.x, finger 1) or       \
+     * the finger index first (older clients); 62h takes on/off after         \
+     * it, so one byte is 4.x's on/off and two are index and on/off. */       \
+    X(0x60, GET_FINGER1_INFO, finger_info, "GetFinger1Info", 1, 1,            \
+      WSG_CMDF_EMPTY_OK, WSG_FINGER_INDEX, WSG_FINGER_INFO)                   \
+    X(0x61, GET_FINGER1_FLAGS, finger_flags, "GetFinger1Flags", 1, 1,         \
+      WSG_CMDF_EMPTY_OK, WSG_FINGER_INDEX,                                    \
+      WSG_FIELDS(WSG_F_U16("flags", "")))                                     \
+    X(0x62, FINGER1_POWER, finger_power, "Finger1PowerControl", 1, 2, 0,      \
+      WSG_FINGER_POWER, WSG_NONE)                                             \
+    X(0x63, GET_FINGER1_DATA, finger_data, "GetFinger1Data", 1, 1,            \
+      WSG_CMDF_EMPTY_OK, WSG_FINGER_INDEX,                                    \
+      WSG_FIELDS(WSG_F_BYTES("data", WSG_PAYLOAD_MAX)))                       \
+    X(0x70, GET_FINGER2_INFO, finger_info, "GetFinger2Info", 0, 0,            \
+      WSG_CMDF_NO_PARAM, WSG_NONE, WSG_FINGER_INFO)                           \
+    X(0x71, GET_FINGER2_FLAGS, finger_flags, "GetFinger2Flags", 0, 0,         \
+      WSG_CMDF_NO_PARAM, WSG_NONE, WSG_FIELDS(WSG_F_U16("flags", "")))        \
+    X(0x72, FINGER2_POWER, finger_power, "Finger2PowerControl", 1, 1, 0,      \
+      WSG_FINGER_POWER, WSG_NONE)                                             \
+    X(0x73, GET_FINGER2_DATA, finger_data, "GetFinger2Data", 0, 0,            \
+      WSG_CMDF_NO_PARAM, WSG_NONE,                                            \
+      WSG_FIELDS(WSG_F_BYTES("data", WSG_PAYLOAD_MAX)))
 
 /* The C names the lists make: WSG_E_SUCCESS, WSG_SF_REFERENCED (a mask),
  * WSG_GS_HOLDING, WSG_CMD_GET_WIDTH. */

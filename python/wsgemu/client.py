@@ -128,6 +128,15 @@ class Cmd(enum.IntEnum):
     SET_DEVICE_TAG = 0x51
     GET_DEVICE_TAG = 0x52
     GET_SYSTEM_LIMITS = 0x53
+    # The finger commands of later firmware (docs/fingers.md).
+    GET_FINGER1_INFO = 0x60
+    GET_FINGER1_FLAGS = 0x61
+    FINGER1_POWER = 0x62
+    GET_FINGER1_DATA = 0x63
+    GET_FINGER2_INFO = 0x70
+    GET_FINGER2_FLAGS = 0x71
+    FINGER2_POWER = 0x72
+    GET_FINGER2_DATA = 0x73
 
 
 #: The commands answered E_CMD_PENDING first and their result later.

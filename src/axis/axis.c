@@ -380,18 +380,18 @@ static struct wsg_drive wsg_axis_drive(const struct wsg_axis *ax,
 }
 
 /* What the plant says of the fingers under drive d, now. */
-static struct wsg_fingers wsg_axis_sense(const struct wsg_axis *ax,
-                                         const struct wsg_drive *d)
+static struct wsg_plant_fingers wsg_axis_sense(const struct wsg_axis *ax,
+                                               const struct wsg_drive *d)
 {
     const struct wsg_plant *p = wsg_axis_plant_c(ax);
-    struct wsg_fingers o;
+    struct wsg_plant_fingers o;
 
     p->ops->sense(p, d, &o);
     return o;
 }
 
 /* Command the drive for one step of dt and read the fingers back. */
-static struct wsg_fingers
+static struct wsg_plant_fingers
 wsg_axis_drive_step(struct wsg_axis *ax, const struct wsg_drive *d, double dt)
 {
     struct wsg_plant *p = wsg_axis_plant_of(ax);
@@ -706,7 +706,7 @@ static int wsg_axis_advance(struct wsg_axis *ax, double dt)
     double x, v;
     double f = m->kind == WSG_MOTION_SNAP ? ax->clamp_force : ax->force_limit;
     struct wsg_drive d;
-    struct wsg_fingers o;
+    struct wsg_plant_fingers o;
     int over;
 
     m->prof.t += dt;
@@ -745,7 +745,7 @@ static int wsg_axis_push_at(const struct wsg_axis *ax, double dir, double f,
                             double *x)
 {
     struct wsg_drive d = wsg_axis_drive(ax, WSG_DRIVE_PUSH, dir, f);
-    struct wsg_fingers o;
+    struct wsg_plant_fingers o;
 
     d.x = wsg_axis_end_stop(ax, dir);
     o = wsg_axis_sense(ax, &d);
@@ -812,7 +812,7 @@ static int wsg_axis_speed_advance(struct wsg_axis *ax, double dt)
     double v0 = ax->speed, vs = ax->motion.speed, a = ax->cfg.max_acc;
     double dv = vs - v0, v1, s, x, dir;
     struct wsg_drive d;
-    struct wsg_fingers o;
+    struct wsg_plant_fingers o;
 
     if (ax->push_dir || (v0 == 0.0 && vs == 0.0))
         return 0;
@@ -870,7 +870,7 @@ static void wsg_axis_hold(struct wsg_axis *ax)
     struct wsg_motion snap;
     struct wsg_drive d =
         wsg_axis_drive(ax, WSG_DRIVE_CLAMP, ax->clamp_dir, ax->clamp_force);
-    struct wsg_fingers o;
+    struct wsg_plant_fingers o;
 
     d.x = ax->clamp_target;
     o = wsg_axis_sense(ax, &d);
@@ -1011,7 +1011,7 @@ void wsg_axis_step(struct wsg_axis *ax)
 int wsg_axis_idle(const struct wsg_axis *ax)
 {
     struct wsg_drive d;
-    struct wsg_fingers o;
+    struct wsg_plant_fingers o;
 
     if (ax->req_fast_stop || ax->req_ack || ax->req_stop ||
         ax->req_motion.kind || ax->req_cancelled.kind)

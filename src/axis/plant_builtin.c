@@ -167,7 +167,8 @@ static void builtin_step(struct wsg_plant *p, const struct wsg_drive *d,
 /* The profile's point x reached unless a block or the end stop comes
  * first; MOVE and SPEED differ only in how they meet the end stop. */
 static void sense_follow(const struct wsg_plant_builtin *b,
-                         const struct wsg_drive *d, struct wsg_fingers *o)
+                         const struct wsg_drive *d,
+                         struct wsg_plant_fingers *o)
 {
     double dir = d->dir, x = d->x, xb = 0.0, end = end_stop(b, d, dir);
     int at_end;
@@ -198,7 +199,7 @@ static void sense_follow(const struct wsg_plant_builtin *b,
 }
 
 static void builtin_sense(const struct wsg_plant *p, const struct wsg_drive *d,
-                          struct wsg_fingers *o)
+                          struct wsg_plant_fingers *o)
 {
     const struct wsg_plant_builtin *b = (const struct wsg_plant_builtin *)p;
     double xb = 0.0;

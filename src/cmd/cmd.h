@@ -33,6 +33,16 @@ struct wsg_cmd_desc {
 
 extern const struct wsg_cmd_desc wsg_cmd_table[256];
 
+/* The finger commands' handlers (fingers.c), 60h..63h and 70h..73h. */
+uint16_t wsg_cmd_finger_info(struct wsg_device *d, struct wsg_session *s,
+                             const struct wsg_frame *f, struct wsg_reply *r);
+uint16_t wsg_cmd_finger_flags(struct wsg_device *d, struct wsg_session *s,
+                              const struct wsg_frame *f, struct wsg_reply *r);
+uint16_t wsg_cmd_finger_power(struct wsg_device *d, struct wsg_session *s,
+                              const struct wsg_frame *f, struct wsg_reply *r);
+uint16_t wsg_cmd_finger_data(struct wsg_device *d, struct wsg_session *s,
+                             const struct wsg_frame *f, struct wsg_reply *r);
+
 /* Build and send one reply packet; records SF_CMD_FAILURE. */
 void wsg_device_reply(struct wsg_device *d, struct wsg_session *s, uint8_t id,
                       uint16_t status, const uint8_t *params, size_t len);

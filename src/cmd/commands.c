@@ -229,12 +229,15 @@ static uint16_t wsg_cmd_tare(struct wsg_device *d, struct wsg_session *s,
     (void)s;
     (void)f;
     (void)r;
-    if (!wsg_axis_cfg(wsg_device_axis(d))->force_sensor)
-        return WSG_E_NOT_AVAILABLE;
+    if (!wsg_fingers_fmf(&d->fingers))
+        return WSG_E_NOT_AVAILABLE; /* no force measurement finger */
     /* Only out of force control mode (3.3.9), which is what D9 shows:
      * the flag and the rule are one. */
-    if (wsg_axis_flags(wsg_device_axis(d)) & WSG_SF_FORCECNTL_MODE)
+    if (wsg_device_flags(d) & WSG_SF_FORCECNTL_MODE)
         return WSG_E_ACCESS_DENIED;
+    /* Zeroed at the settle after this answer: what each force measurement
+     * finger feels then reads 0 N from there on. */
+    wsg_finger_request_tare(&d->fingers);
     return WSG_E_SUCCESS;
 }
 

@@ -66,12 +66,24 @@ void wsg_device_init(struct wsg_device *d, const struct wsg_axis_config *cfg)
     d->info.swrev = 0x2200; /* firmware 2.2.0 */
     d->info.serial = 1;
     d->disconnect_fast_stop = 1;
+    /* --force-sensor on: force measurement fingers, else generic ones. */
+    wsg_fingers_init(&d->fingers,
+                     cfg->force_sensor ? WSG_FINGER_FMF : WSG_FINGER_GENERIC);
+    wsg_fingers_update(&d->fingers, wsg_device_axis(d));
 }
 
 void wsg_device_reset(struct wsg_device *d)
 {
+    int i;
+
     wsg_axis_reset(wsg_device_axis(d));
     d->cmd_failure = 0;
+    /* The fingers are powered again, their tare gone; their kinds stay. */
+    for (i = 0; i < WSG_FINGER_COUNT; i++) {
+        d->fingers.f[i].tare = 0.0;
+        wsg_finger_request_power(&d->fingers, i, 1);
+    }
+    wsg_device_settle(d);
     /* A gripper that powers up again streams nothing until asked. */
     wsg_device_end_streams(d);
 }
@@ -141,7 +153,7 @@ void wsg_device_session_closed(struct wsg_device *d, struct wsg_session *s)
          * told if still there; s itself no longer resolves), and the next
          * answer, to anyone, shows FAST STOP. */
         wsg_axis_request_fast_stop(wsg_device_axis(d));
-        wsg_axis_settle(wsg_device_axis(d));
+        wsg_device_settle(d);
     }
 }
 
@@ -166,8 +178,21 @@ struct wsg_session *wsg_device_session(struct wsg_device *d, uint32_t tag)
 
 uint32_t wsg_device_flags(const struct wsg_device *d)
 {
-    return wsg_axis_flags(wsg_device_axis_const(d)) | d->ext_flags |
-           (d->cmd_failure ? WSG_SF_CMD_FAILURE : 0u);
+    const struct wsg_axis *ax = wsg_device_axis_const(d);
+    uint32_t f = wsg_axis_flags(ax) | d->ext_flags |
+                 (d->cmd_failure ? WSG_SF_CMD_FAILURE : 0u);
+    enum wsg_grasp_state gs = wsg_axis_grasp_state(ax);
+
+    /* Force control is what force measurement fingers give a grasp: the
+     * fingers fitted now decide D9, whatever the model was made with. */
+    f &= ~(uint32_t)WSG_SF_FORCECNTL_MODE;
+    if (wsg_fingers_fmf(&d->fingers) &&
+        (gs == WSG_GS_GRASPING || gs == WSG_GS_HOLDING))
+        f |= WSG_SF_FORCECNTL_MODE;
+    /* D17: a finger's electronics failed. */
+    if (wsg_fingers_fault(&d->fingers))
+        f |= WSG_SF_FINGER_FAULT;
+    return f;
 }
 
 uint16_t wsg_device_motion_check(const struct wsg_device *d, int needs_homing)
@@ -365,16 +390,25 @@ void wsg_device_poll_streaming(struct wsg_device *d)
 void wsg_device_step(struct wsg_device *d)
 {
     wsg_axis_step(wsg_device_axis(d));
+    wsg_fingers_update(&d->fingers, wsg_device_axis_const(d));
 }
 
+void wsg_device_settle(struct wsg_device *d)
+{
+    wsg_axis_settle(wsg_device_axis(d));
+    wsg_fingers_update(&d->fingers, wsg_device_axis_const(d));
+}
+
+/* Bytes on a finger's wire need every step, as a moving axis does. */
 int wsg_device_idle(const struct wsg_device *d)
 {
-    return wsg_axis_idle(wsg_device_axis_const(d));
+    return wsg_axis_idle(wsg_device_axis_const(d)) &&
+           !wsg_fingers_busy(&d->fingers);
 }
 
 int wsg_device_busy(const struct wsg_device *d)
 {
-    return d->streaming != NULL || !wsg_axis_idle(wsg_device_axis_const(d));
+    return d->streaming != NULL || !wsg_device_idle(d);
 }
 
 /* Steps from now until a stream of s has a packet due, UINT64_MAX when
@@ -415,7 +449,7 @@ uint64_t wsg_device_next(const struct wsg_device *d)
     const struct wsg_session *s;
     uint64_t best;
 
-    if (!wsg_axis_idle(wsg_device_axis_const(d)))
+    if (!wsg_device_idle(d))
         return 1;
     best = UINT64_MAX;
     for (s = d->streaming; s && best > 1; s = s->stream_next) {
@@ -430,4 +464,6 @@ uint64_t wsg_device_next(const struct wsg_device *d)
 void wsg_device_advance_idle(struct wsg_device *d, uint64_t nsteps)
 {
     wsg_axis_advance_idle(wsg_device_axis(d), nsteps);
+    /* Nothing is on the fingers' wires: this only brings their clock. */
+    wsg_fingers_update(&d->fingers, wsg_device_axis_const(d));
 }

@@ -44,7 +44,7 @@ void wsg_device_dispatch(struct wsg_device *d, struct wsg_session *s,
     /* A script's own command: the script answers it, when it reads it. */
     if (d->user_cmd && !s->announced && wsg_device_registered(d, f->id)) {
         d->user_cmd(d->user_ctx, s, f);
-        wsg_axis_settle(wsg_device_axis(d));
+        wsg_device_settle(d);
         return;
     }
     r.len = 0;
@@ -59,5 +59,5 @@ void wsg_device_dispatch(struct wsg_device *d, struct wsg_session *s,
      * in the same read, sees the new state. Nothing else leaves requests
      * pending between commands: a close settles itself, and so does the
      * control channel. */
-    wsg_axis_settle(wsg_device_axis(d));
+    wsg_device_settle(d);
 }

@@ -436,6 +436,107 @@ static void append(char *buf, size_t cap, size_t *used, const char *fmt, ...)
         *used += (size_t)n;
 }
 
+/* The size of the patch the part presses on each finger's pad. */
+static void cmd_patch(struct ctl_ctx *c, int argc, char **argv)
+{
+    struct wsg_axis *ax = wsg_device_axis(&c->ctl->cur->dev);
+    double w, h;
+
+    if (argc == 2 && strcmp(argv[1], "default") == 0) {
+        wsg_axis_set_part_patch(ax, 0.0, 0.0);
+        changed(c, "patch %g %g", WSG_AXIS_PATCH_MM, WSG_AXIS_PATCH_MM);
+        return;
+    }
+    if (argc != 3 || !parse_num(argv[1], &w) || !parse_num(argv[2], &h) ||
+        w <= 0.0 || h <= 0.0 || w > 1000.0 || h > 1000.0) {
+        reply(c, "error usage: patch W H (mm, 0 < W, H <= 1000) | patch "
+                 "default");
+        return;
+    }
+    wsg_axis_set_part_patch(ax, w, h);
+    changed(c, "patch %g %g", w, h);
+}
+
+/* finger: both as JSON; finger I KIND | device FILE | power on|off |
+ * cells. */
+static void cmd_finger(struct ctl_ctx *c, int argc, char **argv)
+{
+    struct wsg_gripper *g = c->ctl->cur;
+    struct wsg_fingers *fs = &g->dev.fingers;
+    char buf[WSG_CTL_REPLY_MAX - 8], err[512];
+    size_t used = 0;
+    int i, k;
+
+    if (argc == 1) {
+        uint32_t faults = wsg_axis_faults(wsg_device_axis(&g->dev));
+
+        append(buf, sizeof buf, &used, "[");
+        for (i = 0; i < WSG_FINGER_COUNT; i++)
+            append(buf, sizeof buf, &used,
+                   "%s{\"kind\":\"%s\",\"type\":%d,\"size\":%u,"
+                   "\"flags\":%u,\"powered\":%s,\"force\":%.3f,"
+                   "\"model\":%s%s%s}",
+                   i ? "," : "", wsg_finger_kind_name(fs->f[i].kind),
+                   (int)wsg_finger_type(fs, i),
+                   (unsigned)wsg_finger_size(fs, i),
+                   (unsigned)wsg_finger_flags(fs, i, faults),
+                   fs->f[i].powered ? "true" : "false", fs->f[i].contact.force,
+                   g->fdev[i] ? "\"" : "",
+                   g->fdev[i] ? wsg_fdev_name(g->fdev[i]) : "null",
+                   g->fdev[i] ? "\"" : "");
+        append(buf, sizeof buf, &used, "]");
+        reply(c, "ok %s", buf);
+        return;
+    }
+    if ((strcmp(argv[1], "0") != 0 && strcmp(argv[1], "1") != 0) || argc < 3) {
+        reply(c, "error usage: finger [0|1 none|generic|fmf|dsa|device "
+                 "FILE|power on|off|cells]");
+        return;
+    }
+    i = argv[1][0] - '0';
+    if (argc == 3 && strcmp(argv[2], "cells") == 0) {
+        append(buf, sizeof buf, &used, "[");
+        for (k = 0; k < WSG_DSA_CELLS; k++)
+            append(buf, sizeof buf, &used, "%s%u", k ? "," : "",
+                   fs->f[i].kind == WSG_FINGER_DSA && fs->f[i].powered
+                       ? (unsigned)fs->f[i].cells[k]
+                       : 0u);
+        append(buf, sizeof buf, &used, "]");
+        reply(c, "ok %s", buf);
+        return;
+    }
+    if (argc == 4 && strcmp(argv[2], "power") == 0) {
+        int on = strcmp(argv[3], "on") == 0;
+
+        if (!on && strcmp(argv[3], "off") != 0) {
+            reply(c, "error usage: finger 0|1 power on|off");
+            return;
+        }
+        if (fs->f[i].kind == WSG_FINGER_NONE) {
+            reply(c, "error finger %d: no finger fitted", i);
+            return;
+        }
+        wsg_finger_request_power(fs, i, on);
+        wsg_device_settle(&g->dev);
+        changed(c, "finger %d power %s", i, on ? "on" : "off");
+        return;
+    }
+    k = wsg_finger_kind_parse(argv[2]);
+    if (k < 0 || (k == WSG_FINGER_DEVICE) != (argc == 4) || argc > 4) {
+        reply(c, "error usage: finger 0|1 none|generic|fmf|dsa|device FILE");
+        return;
+    }
+    if (wsg_gripper_finger(g, i, k, argc == 4 ? argv[3] : NULL, err,
+                           sizeof err) < 0) {
+        reply(c, "error finger %d: %s", i, err);
+        return;
+    }
+    if (k == WSG_FINGER_DEVICE)
+        changed(c, "finger %d device %s", i, wsg_fdev_name(g->fdev[i]));
+    else
+        changed(c, "finger %d %s", i, argv[2]);
+}
+
 static void cmd_state(struct ctl_ctx *c, int argc, char **argv)
 {
     char buf[WSG_STATE_JSON_MAX];
@@ -689,7 +790,7 @@ static void run_line(struct ctl_ctx *c, char *line)
     c->ctl->cur = &c->ctl->sched->grippers[c->s->gripper];
     wsg_sched_touch(c->ctl->sched, c->ctl->cur);
     run_command(c, argc, argv);
-    wsg_axis_settle(wsg_device_axis(&c->ctl->cur->dev));
+    wsg_device_settle(&c->ctl->cur->dev);
     wsg_sched_check(c->ctl->sched, c->ctl->cur);
 }
 
@@ -707,6 +808,9 @@ static const struct ctl_command {
      "object box W D H|cylinder D L|sphere D [MASS [FRICTION]]|none"},
     {"pull", cmd_pull, 1, "pull N"},
     {"fault", cmd_fault, 1, "fault NAME on|off"},
+    {"patch", cmd_patch, 1, "patch W H|default"},
+    {"finger", cmd_finger, 1,
+     "finger [0|1 none|generic|fmf|dsa|device FILE|power on|off|cells]"},
     {"time", cmd_time, 1, "time [scale X|pause|step MS|resume]"},
     {"state", cmd_state, 0, "state"},
     {"drop", cmd_drop, 0, "drop"},

@@ -210,6 +210,17 @@ static int open_gripper(struct wsg_daemon *d, struct wsg_gripper *g,
         memcpy(g->dev.tag, o.device_tag, g->dev.tag_len);
         g->dev.tag[g->dev.tag_len] = '\0';
     }
+    for (r = 0; r < 2; r++) {
+        char err[512];
+
+        if (!o.finger_kind[r])
+            continue;
+        if (wsg_gripper_finger(g, r, o.finger_kind[r] - 1, o.finger_model[r],
+                               err, sizeof err) < 0) {
+            fprintf(stderr, "wsgemu: --finger%d: %s\n", r, err);
+            return -EINVAL;
+        }
+    }
     if (o.initial_part.given)
         wsg_axis_set_part(wsg_device_axis(&g->dev), o.initial_part.value,
                           o.initial_part_stiffness);

@@ -191,9 +191,41 @@ int wsg_gripper_script(struct wsg_gripper *g, struct wsg_script **out)
     return r;
 }
 
+int wsg_gripper_finger(struct wsg_gripper *g, int i, int kind,
+                       const char *model, char *err, size_t errcap)
+{
+    struct wsg_fdev *m = NULL;
+    int r;
+
+    if (i < 0 || i > 1 || kind < 0 || kind >= WSG_FINGER_KINDS ||
+        (kind == WSG_FINGER_DEVICE && !model)) {
+        snprintf(err, errcap, "no such finger or kind");
+        return -EINVAL;
+    }
+    if (kind == WSG_FINGER_DEVICE) {
+        /* Attached only once it loads: until then the old one serves. */
+        r = wsg_fdev_open(&m, &g->dev.fingers, i, model, NULL, 0, NULL, 0, err,
+                          errcap);
+        if (r < 0)
+            return r;
+    }
+    wsg_fdev_close(g->fdev[i]); /* detaches it if still attached */
+    g->fdev[i] = m;
+    if (kind != WSG_FINGER_DEVICE)
+        wsg_finger_request_kind(&g->dev.fingers, i,
+                                (enum wsg_finger_kind)kind);
+    wsg_device_settle(&g->dev);
+    return 0;
+}
+
 void wsg_gripper_fini(struct wsg_gripper *g)
 {
     size_t i;
+
+    for (i = 0; i < 2; i++) {
+        wsg_fdev_close(g->fdev[i]);
+        g->fdev[i] = NULL;
+    }
 
     if (g->runner)
         wsg_runner_forget(g->runner, g);

@@ -24,6 +24,7 @@
 #include <stdint.h>
 
 #include "delay.h"
+#include "fdev.h"
 #include "log.h"
 #include "runner.h"
 #include "script.h"
@@ -57,7 +58,16 @@ struct wsg_gripper {
     uint8_t ready;
     /* --physics mujoco: the plant its fingers move in (NULL: built-in). */
     struct wsg_plant *plant;
+    /* The device models of fingers with custom electronics (NULL: none). */
+    struct wsg_fdev *fdev[2];
 };
+
+/* Fit finger i (0 or 1) of g with a kind (wsg/finger.h), settled now; a
+ * device takes the model in file model (its memory WSG_FDEV_MEMORY). A
+ * device model it had goes. 0, or -errno with the reason in err (the
+ * model cannot be read or does not compile: the finger stays as it was). */
+int wsg_gripper_finger(struct wsg_gripper *g, int i, int kind,
+                       const char *model, char *err, size_t errcap);
 
 /* Delay every packet of g by ms plus a draw of 0..jitter_ms (simulated
  * time), in order per interface. The draws are seeded from g's number and

@@ -292,6 +292,37 @@ static int set_pty_mode(struct wsg_options *o, const struct wsg_setting *s,
     return 0;
 }
 
+/* --finger0, --finger1: none, generic, fmf, dsa or device:FILE (a device
+ * model, docs/fingers.md). */
+static int set_finger(struct wsg_options *o, const struct wsg_setting *s,
+                      const char *val, unsigned line, char *err, size_t errcap)
+{
+    int i = s->name[6] == '1', k;
+
+    if (strncmp(val, "device:", 7) == 0 && val[7]) {
+        const char *p = keep(o, val + 7, line > 0);
+
+        if (!p) {
+            snprintf(err, errcap, "too many long values");
+            return -E2BIG;
+        }
+        o->finger_kind[i] = WSG_FINGER_DEVICE + 1;
+        o->finger_model[i] = p;
+        return 0;
+    }
+    k = wsg_finger_kind_parse(val);
+    if (k < 0 || k == WSG_FINGER_DEVICE) {
+        snprintf(err, errcap,
+                 "'%s' is not a finger: none, generic, fmf, dsa or "
+                 "device:FILE",
+                 val);
+        return -EINVAL;
+    }
+    o->finger_kind[i] = k + 1;
+    o->finger_model[i] = NULL;
+    return 0;
+}
+
 /* A group name, or a GID in decimal, looked up now: a group the system
  * does not know is a mistake in the setup, reported before anything
  * opens. */
@@ -706,6 +737,22 @@ static const struct wsg_setting settings[] = {
              "Tare (38h) works, 40h shows\n"
              "SF_FORCECNTL_MODE while grasping\n"
              "and holding (default {default})"},
+    {.name = "finger0",
+     .type = WSG_SETTING_PARSE,
+     .parse = set_finger,
+     .section = WSG_SECTION_GRIPPER,
+     .arg = "KIND",
+     .help = "finger 0 (finger 1 of 60h..63h):\n"
+             "none, generic, fmf, dsa or\n"
+             "device:FILE, a device model (default\n"
+             "fmf with --force-sensor on, else\n"
+             "generic)"},
+    {.name = "finger1",
+     .type = WSG_SETTING_PARSE,
+     .parse = set_finger,
+     .section = WSG_SECTION_GRIPPER,
+     .arg = "KIND",
+     .help = "finger 1 (70h..73h), as --finger0"},
     {.name = "serial",
      .type = WSG_SETTING_UINT,
      .at = WSG_AT(serial),

@@ -86,6 +86,10 @@ struct wsg_options {
     int check_crc;                       /* 0 with --no-crc */
     int disconnect_fast_stop;            /* 0 with --no-disconnect-fast-stop */
     int force_sensor;                    /* --force-sensor on: tare, D9 */
+    /* --finger0, --finger1: WSG_FINGER_* + 1 (0: not given, the kind
+     * --force-sensor implies), and a device model's file. */
+    int finger_kind[2];
+    const char *finger_model[2];
     int text_interface;      /* --text-interface on: GCL on the TCP port */
     double release_pullback; /* mm: GCL's RELEASE() */
     /* --latency MS[:JITTER]: what the gripper sends leaves MS plus up to

@@ -96,6 +96,32 @@ static void append_script(char *buf, size_t cap, size_t *used,
     append(buf, cap, used, "},");
 }
 
+/* Each finger: its kind, power, fault, and what its pad feels (N). The
+ * DSA cells are the control channel's `finger I cells` and the page's
+ * /fingers: 84 numbers a finger would crowd this line. */
+static void append_fingers(char *buf, size_t cap, size_t *used,
+                           const struct wsg_device *d)
+{
+    uint32_t faults = wsg_axis_faults(wsg_device_axis_const(d));
+    int i;
+
+    append(buf, cap, used, "\"fingers\":[");
+    for (i = 0; i < WSG_FINGER_COUNT; i++) {
+        const struct wsg_finger *f = &d->fingers.f[i];
+
+        append(buf, cap, used,
+               "%s{\"kind\":\"%s\",\"powered\":%s,\"fault\":%s,"
+               "\"force\":%.3f}",
+               i ? "," : "", wsg_finger_kind_name(f->kind),
+               f->powered ? "true" : "false",
+               (wsg_finger_flags(&d->fingers, i, faults) & WSG_FF_FAULT)
+                   ? "true"
+                   : "false",
+               f->contact.force);
+    }
+    append(buf, cap, used, "],");
+}
+
 void wsg_state_format_time(char *buf, size_t len, uint64_t us)
 {
     char frac[8];
@@ -158,6 +184,7 @@ size_t wsg_state_format(char *buf, size_t cap, const struct wsg_gripper *g,
         (unsigned long)wsg_gripper_delayed(g),
         (unsigned long long)wsg_gripper_delay_dropped(g));
     append_script(buf, cap, &used, g);
+    append_fingers(buf, cap, &used, d);
     /* The world's part and obstacle too: the web page draws them
      * between the fingers. */
     if (wsg_axis_part(ax, &part_width, &stiffness))

@@ -19,7 +19,9 @@
 #include "wsg/gcl.h"
 #include "wsg/proto.h"
 
-#define WSG_GCL_OUT_MAX 128u
+/* An answer line at most: FDATA of a DSA pad is 84 numbers of up to 4
+ * digits. */
+#define WSG_GCL_OUT_MAX 512u
 
 struct wsg_gcl_command;
 typedef void (*gcl_run_fn)(struct wsg_gcl *g, const struct wsg_gcl_command *k,
@@ -357,24 +359,45 @@ static void run_get(struct wsg_gcl *g, const struct wsg_gcl_command *k,
     gcl_dispatch(g, k, k->id, &zero, k->id == WSG_CMD_GET_GRASP_STATS);
 }
 
-/* FDATA? (FDATA[i]? for finger i): a force measurement finger's force. */
+/* FDATA? (FDATA[i]? for finger i, FDATA? finger 0): a force measurement
+ * finger's force (tared), a DSA pad's 84 cells comma-separated; the finger
+ * commands' errors otherwise (no finger, no power, a fault), E_NO_SENSOR
+ * for a finger without data. */
 static void run_fdata(struct wsg_gcl *g, const struct wsg_gcl_command *k,
                       const struct wsg_gcl_cmd *c)
 {
-    const struct wsg_axis *ax = wsg_device_axis_const(g->dev);
+    struct wsg_fingers *fs = &g->dev->fingers;
+    int i = c->index >= 0 ? c->index : 0;
+    uint16_t st;
+    char line[WSG_DSA_CELLS * 5 + 16];
+    size_t used = 0;
+    int j;
 
     if (c->index > 1) {
         gcl_err(g, k->name, WSG_E_INDEX_OUT_OF_BOUNDS);
         return;
     }
-    if (!wsg_axis_cfg(ax)->force_sensor) {
-        gcl_err(g, k->name, WSG_E_NO_SENSOR);
+    st = wsg_finger_check(fs, i,
+                          wsg_axis_faults(wsg_device_axis_const(g->dev)));
+    if (st == WSG_E_SUCCESS && fs->f[i].kind != WSG_FINGER_FMF &&
+        fs->f[i].kind != WSG_FINGER_DSA)
+        st = WSG_E_NO_SENSOR;
+    if (st != WSG_E_SUCCESS) {
+        gcl_err(g, k->name, st);
         return;
     }
+    if (fs->f[i].kind == WSG_FINGER_FMF) {
+        snprintf(line, sizeof line, "%.1f", (double)fs->f[i].fmf);
+    } else {
+        for (j = 0; j < WSG_DSA_CELLS; j++)
+            used +=
+                (size_t)snprintf(line + used, sizeof line - used, "%s%u",
+                                 j ? "," : "", (unsigned)fs->f[i].cells[j]);
+    }
     if (c->index >= 0)
-        gcl_line(g, "FDATA[%d]=%.1f", c->index, wsg_axis_force(ax));
+        gcl_line(g, "FDATA[%d]=%s", c->index, line);
     else
-        gcl_line(g, "FDATA=%.1f", wsg_axis_force(ax));
+        gcl_line(g, "FDATA=%s", line);
 }
 
 /* The values AUTOSEND can push, and the stream each one is. */

@@ -399,7 +399,7 @@ static void mj_step_plant(struct wsg_plant *pl, const struct wsg_drive *dr,
 }
 
 static void mj_sense(const struct wsg_plant *pl, const struct wsg_drive *dr,
-                     struct wsg_fingers *o)
+                     struct wsg_plant_fingers *o)
 {
     const struct mj_plant *p = (const struct mj_plant *)pl;
     double w = width_mm(p) + dr->offset, f[2], still = 1, sat = 1;

@@ -584,79 +584,6 @@ static const luaL_Reg grasping_lib[] = {{"move", grasping_move},
                                         {"state", grasping_state},
                                         {NULL, NULL}};
 
-/* ---- finger ---- */
-
-static int finger_index(lua_State *L)
-{
-    lua_Integer i = luaL_checkinteger(L, 1);
-
-    luaL_argcheck(L, i == 0 || i == 1, 1, "a finger is 0 or 1");
-    return (int)i;
-}
-
-static int finger_fmf(lua_State *L)
-{
-    return wsg_axis_cfg(api_axis(L))->force_sensor;
-}
-
-static int finger_type(lua_State *L)
-{
-    finger_index(L);
-    lua_pushstring(L, finger_fmf(L) ? "fmf" : "generic");
-    return 1;
-}
-
-/* A force measurement finger measures the force it grips with; a generic
- * one has no data. */
-static int finger_data(lua_State *L)
-{
-    finger_index(L);
-    if (finger_fmf(L))
-        lua_pushnumber(L, wsg_axis_force(api_axis(L)));
-    else
-        lua_pushnil(L);
-    return 1;
-}
-
-static int finger_count(lua_State *L)
-{
-    lua_pushinteger(L, 2);
-    return 1;
-}
-
-static int finger_power(lua_State *L)
-{
-    struct wsg_script *h = wsg_script_of(L);
-    int i = finger_index(L);
-
-    if (!lua_isnoneornil(L, 2))
-        h->finger_power[i] = lua_toboolean(L, 2);
-    lua_pushboolean(L, h->finger_power[i]);
-    return 1;
-}
-
-/* The pass-through to custom finger electronics: the emulated fingers
- * have none, so each answers nil and why, as Lua's io functions do. */
-static int finger_nothing(lua_State *L)
-{
-    int i = finger_index(L);
-
-    lua_pushnil(L);
-    lua_pushfstring(L, "finger %d: no serial or SPI interface on %s fingers",
-                    i, finger_fmf(L) ? "force measurement" : "generic");
-    return 2;
-}
-
-static const luaL_Reg finger_lib[] = {{"type", finger_type},
-                                      {"data", finger_data},
-                                      {"count", finger_count},
-                                      {"power", finger_power},
-                                      {"interface", finger_nothing},
-                                      {"read", finger_nothing},
-                                      {"write", finger_nothing},
-                                      {"spi", finger_nothing},
-                                      {NULL, NULL}};
-
 /* ---- socket ---- */
 
 static int socket_gettime(lua_State *L)
@@ -862,8 +789,7 @@ void wsg_script_open_api(lua_State *L, struct wsg_script *h)
     lua_setglobal(L, "gripper");
     luaL_newlib(L, grasping_lib);
     lua_setglobal(L, "grasping");
-    luaL_newlib(L, finger_lib);
-    lua_setglobal(L, "finger");
+    wsg_script_open_finger(L); /* finger.c */
 
     /* The prelude gets the real load and the output, and keeps them to
      * itself. */

@@ -842,7 +842,6 @@ int wsg_script_start_fd(struct wsg_script *h, int fd, const char *file,
     h->dev->ext_flags &= ~(uint32_t)WSG_SF_SCRIPT_FAILURE;
     h->pid[0] = 1.0;
     h->pid[1] = h->pid[2] = 0.0;
-    h->finger_power[0] = h->finger_power[1] = 1;
     h->qlen = 0;
     h->reply_tag = 0;
     h->dev->ext_flags |= WSG_SF_SCRIPT_RUNNING;

@@ -71,7 +71,6 @@ struct wsg_script {
     size_t qhead, qlen;
     uint8_t *tx; /* cmd.send's packet, WSG_SCRIPT_SEND_MAX payload */
     double pid[3];
-    int finger_power[2];
     char out[WSG_SCRIPT_OUTPUT_MAX]; /* ring of what it printed */
     uint64_t out_total;
 };
@@ -109,6 +108,9 @@ int wsg_script_loadfile(lua_State *L, const char *path);
 int wsg_script_loadmodule(lua_State *L, const char *dir, const char *rel,
                           const char *name);
 
+/* The finger library (finger.c): finger.type, data, power, and the
+ * UART and SPI to custom finger electronics. */
+void wsg_script_open_finger(lua_State *L);
 /* Open the script's libraries (api.c) in L: the sandboxed standard ones,
  * the gripper's and the Lua 5.1/5.2 names. */
 void wsg_script_open_api(lua_State *L, struct wsg_script *h);

@@ -130,8 +130,9 @@ h[0xBA] = function(id)
   wire.reply(id, finger.type(0), finger.type(1), finger.data(0),
              finger.data(1), finger.count(), finger.power(0),
              finger.power(1, false), finger.power(1), finger.power(1, true),
-             two(finger.interface(0)), two(finger.read(1)),
-             two(finger.write(0, {1})), two(finger.spi(1, {1, 2})), bad_ok,
+             two(finger.interface(0, "uart", 115200)),
+             two(finger.bytes_available(1)), two(finger.write(0, {1})),
+             two(finger.spi(1, {1, 2})), bad_ok,
              bad_err)
 end
 

@@ -1,0 +1,514 @@
+/*
+ * Finger devices (fdev.h): a device model's Lua state, its sandbox and
+ * bounds, and the link that ties it to its finger.
+ *
+ * The state lives while the finger has power: power on makes a fresh one
+ * from the model's source and runs it (its body, then on_power(true)),
+ * power off closes it, so a power cycle is the electronics starting
+ * again, as the public scripts that cycle a finger's power expect. Every
+ * call into the model runs under a count hook that ends it after
+ * WSG_FDEV_INSTRUCTIONS instructions and an allocator that refuses memory
+ * past the cap; the library functions whose work the hook cannot see
+ * (the pattern functions) are left out, as are those that reach outside
+ * (files, loading, modules) or are not the same on every run (random
+ * numbers), so a model's answers are exact in lockstep.
+ *
+ * Written to the part of the C API that Lua 5.2 and 5.4 share.
+ */
+#define _GNU_SOURCE
+
+#include "fdev.h"
+
+#include <errno.h>
+#include <fcntl.h>
+#include <lauxlib.h>
+#include <lua.h>
+#include <lualib.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+/* The count hook's period, in instructions. */
+#define FDEV_HOOK_EVERY 1000
+
+struct wsg_fdev {
+    struct wsg_fingers *fs;
+    int finger;
+    lua_State *L; /* NULL: unpowered, or failed */
+    size_t memory, cap;
+    unsigned long ticks; /* hook periods left in this call */
+    char *src;
+    size_t srclen;
+    char name[128];
+    char error[512];
+};
+
+static void *fdev_alloc(void *ud, void *ptr, size_t osize, size_t nsize)
+{
+    struct wsg_fdev *m = ud;
+    void *p;
+
+    if (!ptr)
+        osize = 0;
+    if (nsize == 0) {
+        free(ptr);
+        m->memory -= osize;
+        return NULL;
+    }
+    if (nsize > osize && m->memory + (nsize - osize) > m->cap)
+        return NULL;
+    p = realloc(ptr, nsize);
+    if (p)
+        m->memory = m->memory - osize + nsize;
+    return p;
+}
+
+static struct wsg_fdev *fdev_of(lua_State *L)
+{
+    struct wsg_fdev *m;
+
+    lua_getfield(L, LUA_REGISTRYINDEX, "wsg.fdev");
+    m = lua_touserdata(L, -1);
+    lua_pop(L, 1);
+    return m;
+}
+
+static void fdev_hook(lua_State *L, lua_Debug *ar)
+{
+    struct wsg_fdev *m = fdev_of(L);
+
+    (void)ar;
+    if (m->ticks == 0)
+        luaL_error(L, "ran over its %u instructions", WSG_FDEV_INSTRUCTIONS);
+    m->ticks--;
+}
+
+/* ---- what the model calls: dev.* ---- */
+
+/* Bytes from a string or a table of numbers 0..255 into out (cap). */
+static size_t fdev_bytes(lua_State *L, int arg, uint8_t *out, size_t cap)
+{
+    size_t n, k;
+
+    if (lua_type(L, arg) == LUA_TSTRING) {
+        const char *s = lua_tolstring(L, arg, &n);
+
+        if (n > cap)
+            n = cap;
+        memcpy(out, s, n);
+        return n;
+    }
+    luaL_checktype(L, arg, LUA_TTABLE);
+    n = lua_rawlen(L, arg);
+    if (n > cap)
+        n = cap;
+    for (k = 0; k < n; k++) {
+        lua_Number v;
+
+        lua_rawgeti(L, arg, (int)k + 1);
+        v = lua_tonumber(L, -1);
+        lua_pop(L, 1);
+        if (!(v >= 0 && v <= 255) || v != (lua_Number)(int)v)
+            luaL_error(L, "byte %d is not a number 0..255", (int)k + 1);
+        out[k] = (uint8_t)v;
+    }
+    return n;
+}
+
+/* dev.send(bytes): over the UART towards the gripper; the count taken. */
+static int dev_send(lua_State *L)
+{
+    struct wsg_fdev *m = fdev_of(L);
+    uint8_t buf[WSG_FINGER_FIFO];
+    size_t n = fdev_bytes(L, 1, buf, sizeof buf);
+
+    lua_pushinteger(
+        L, (lua_Integer)wsg_finger_device_send(m->fs, m->finger, buf, n));
+    return 1;
+}
+
+/* dev.contact(): force N, patch centre x, y and size w, h in mm. */
+static int dev_contact(lua_State *L)
+{
+    struct wsg_fdev *m = fdev_of(L);
+    const struct wsg_contact *c = &m->fs->f[m->finger].contact;
+
+    lua_pushnumber(L, c->force);
+    lua_pushnumber(L, c->x);
+    lua_pushnumber(L, c->y);
+    lua_pushnumber(L, c->w);
+    lua_pushnumber(L, c->h);
+    return 5;
+}
+
+/* dev.time(): simulated seconds. */
+static int dev_time(lua_State *L)
+{
+    lua_pushnumber(L, (lua_Number)fdev_of(L)->fs->now_ns / 1e9);
+    return 1;
+}
+
+static int dev_finger(lua_State *L)
+{
+    lua_pushinteger(L, fdev_of(L)->finger);
+    return 1;
+}
+
+/* dev.baud(): the UART's bit rate the gripper set (0: none). */
+static int dev_baud(lua_State *L)
+{
+    struct wsg_fdev *m = fdev_of(L);
+    const struct wsg_finger *f = &m->fs->f[m->finger];
+
+    lua_pushinteger(L, f->iface == WSG_FINGER_IFACE_UART ? (lua_Integer)f->baud
+                                                         : 0);
+    return 1;
+}
+
+static const luaL_Reg dev_lib[] = {
+    {"send", dev_send},     {"contact", dev_contact}, {"time", dev_time},
+    {"finger", dev_finger}, {"baud", dev_baud},       {NULL, NULL}};
+
+/* ---- the state ---- */
+
+static void fdev_remove(lua_State *L, const char *lib,
+                        const char *const *names)
+{
+    if (lib) {
+        lua_getglobal(L, lib);
+        if (!lua_istable(L, -1)) {
+            lua_pop(L, 1);
+            return;
+        }
+    } else {
+        lua_pushglobaltable(L);
+    }
+    for (; *names; names++) {
+        lua_pushnil(L);
+        lua_setfield(L, -2, *names);
+    }
+    lua_pop(L, 1);
+}
+
+/* Run the function on top with nargs under it, within the bounds: 0, or
+ * -1 with the error kept. Leaves nres results. */
+static int fdev_call(struct wsg_fdev *m, int nargs, int nres)
+{
+    lua_State *L = m->L;
+
+    m->ticks = WSG_FDEV_INSTRUCTIONS / FDEV_HOOK_EVERY;
+    if (lua_pcall(L, nargs, nres, 0) != LUA_OK) {
+        const char *e = lua_tostring(L, -1);
+
+        /* Lua's message names the model and the line already. */
+        snprintf(m->error, sizeof m->error, "%s",
+                 e ? e : "an error without a message");
+        lua_pop(L, 1);
+        return -1;
+    }
+    return 0;
+}
+
+static void fdev_stop(struct wsg_fdev *m)
+{
+    if (m->L)
+        lua_close(m->L);
+    m->L = NULL;
+    m->memory = 0;
+}
+
+/* A fresh state with the sandbox, the model's body run. 0 or -1. */
+static int fdev_start(struct wsg_fdev *m)
+{
+    static const char *const base_out[] = {
+        "dofile", "loadfile", "load",           "loadstring", "require",
+        "module", "print",    "collectgarbage", NULL};
+    static const char *const string_out[] = {"find", "match", "gmatch",
+                                             "gsub", "dump",  NULL};
+    static const char *const math_out[] = {"random", "randomseed", NULL};
+    lua_State *L;
+
+    fdev_stop(m);
+    L = lua_newstate(fdev_alloc, m);
+    if (!L) {
+        snprintf(m->error, sizeof m->error, "%s: out of memory", m->name);
+        return -1;
+    }
+    m->L = L;
+    lua_pushlightuserdata(L, m);
+    lua_setfield(L, LUA_REGISTRYINDEX, "wsg.fdev");
+    luaL_requiref(L, "_G", luaopen_base, 1);
+    luaL_requiref(L, "string", luaopen_string, 1);
+    luaL_requiref(L, "table", luaopen_table, 1);
+    luaL_requiref(L, "math", luaopen_math, 1);
+    lua_pop(L, 4);
+    fdev_remove(L, NULL, base_out);
+    fdev_remove(L, "string", string_out);
+    fdev_remove(L, "math", math_out);
+    lua_newtable(L);
+    luaL_setfuncs(L, dev_lib, 0);
+    lua_setglobal(L, "dev");
+    lua_sethook(L, fdev_hook, LUA_MASKCOUNT, FDEV_HOOK_EVERY);
+    if (luaL_loadbufferx(L, m->src, m->srclen, m->name, "t") != LUA_OK) {
+        snprintf(m->error, sizeof m->error, "%s",
+                 lua_tostring(L, -1) ? lua_tostring(L, -1) : "load failed");
+        fdev_stop(m);
+        return -1;
+    }
+    if (fdev_call(m, 0, 0) < 0) {
+        fdev_stop(m);
+        return -1;
+    }
+    return 0;
+}
+
+/* The model's global function name pushed: 1, or 0 (nothing pushed). */
+static int fdev_function(struct wsg_fdev *m, const char *name)
+{
+    lua_getglobal(m->L, name);
+    if (lua_type(m->L, -1) == LUA_TFUNCTION)
+        return 1;
+    lua_pop(m->L, 1);
+    return 0;
+}
+
+/* A failed call: the state goes (the finger faults) until power is
+ * cycled. */
+static int fdev_failed(struct wsg_fdev *m)
+{
+    fdev_stop(m);
+    return -1;
+}
+
+/* ---- the link ---- */
+
+static int link_power(void *ctx, int i, int on)
+{
+    struct wsg_fdev *m = ctx;
+
+    (void)i;
+    if (!on) {
+        fdev_stop(m);
+        return 0;
+    }
+    m->error[0] = '\0';
+    if (fdev_start(m) < 0)
+        return -1;
+    if (!fdev_function(m, "on_power"))
+        return 0;
+    lua_pushboolean(m->L, 1);
+    return fdev_call(m, 1, 0) < 0 ? fdev_failed(m) : 0;
+}
+
+static int link_uart(void *ctx, int i, const uint8_t *p, size_t n)
+{
+    struct wsg_fdev *m = ctx;
+
+    (void)i;
+    if (!m->L)
+        return -1;
+    if (!fdev_function(m, "on_uart"))
+        return 0; /* electronics that do not listen */
+    lua_pushlstring(m->L, (const char *)p, n);
+    return fdev_call(m, 1, 0) < 0 ? fdev_failed(m) : 0;
+}
+
+static int link_spi(void *ctx, int i, const uint8_t *tx, uint8_t *rx, size_t n)
+{
+    struct wsg_fdev *m = ctx;
+    size_t k;
+    const char *s;
+
+    (void)i;
+    if (!m->L)
+        return -1;
+    if (!fdev_function(m, "on_spi"))
+        return 0; /* the idle line */
+    lua_pushlstring(m->L, (const char *)tx, n);
+    if (fdev_call(m, 1, 1) < 0)
+        return fdev_failed(m);
+    s = lua_tolstring(m->L, -1, &k);
+    if (s) /* what it answers; the rest stays 0xFF */
+        memcpy(rx, s, k < n ? k : n);
+    lua_pop(m->L, 1);
+    return 0;
+}
+
+static int link_data(void *ctx, int i, uint8_t *out, size_t cap)
+{
+    struct wsg_fdev *m = ctx;
+    size_t k;
+    const char *s;
+
+    (void)i;
+    if (!m->L)
+        return -1;
+    if (!fdev_function(m, "data"))
+        return 0;
+    if (fdev_call(m, 0, 1) < 0)
+        return fdev_failed(m);
+    s = lua_tolstring(m->L, -1, &k);
+    if (!s)
+        k = 0;
+    if (k > cap)
+        k = cap;
+    memcpy(out, s, k);
+    lua_pop(m->L, 1);
+    return (int)k;
+}
+
+static const struct wsg_finger_link fdev_link = {link_power, link_uart,
+                                                 link_spi, link_data};
+
+/* ---- opening ---- */
+
+static int fdev_read(const char *path, char **out, size_t *n, char *err,
+                     size_t errcap)
+{
+    struct stat st;
+    char *buf;
+    ssize_t r;
+    size_t got = 0;
+    int fd = open(path, O_RDONLY | O_CLOEXEC | O_NONBLOCK);
+
+    if (fd < 0) {
+        r = -errno;
+        snprintf(err, errcap, "%s: %s", path, strerror(errno));
+        return (int)r;
+    }
+    if (fstat(fd, &st) < 0 || !S_ISREG(st.st_mode)) {
+        close(fd);
+        snprintf(err, errcap, "%s: not a file", path);
+        return -EINVAL;
+    }
+    if ((unsigned long long)st.st_size > WSG_FDEV_SOURCE_MAX) {
+        close(fd);
+        snprintf(err, errcap, "%s: larger than %u KiB", path,
+                 WSG_FDEV_SOURCE_MAX >> 10);
+        return -EFBIG;
+    }
+    buf = malloc(WSG_FDEV_SOURCE_MAX + 1u);
+    if (!buf) {
+        close(fd);
+        snprintf(err, errcap, "out of memory");
+        return -ENOMEM;
+    }
+    while (got <= WSG_FDEV_SOURCE_MAX) {
+        r = read(fd, buf + got, WSG_FDEV_SOURCE_MAX + 1u - got);
+        if (r < 0 && errno == EINTR)
+            continue;
+        if (r <= 0)
+            break;
+        got += (size_t)r;
+    }
+    close(fd);
+    if (got > WSG_FDEV_SOURCE_MAX) {
+        free(buf);
+        snprintf(err, errcap, "%s: larger than %u KiB", path,
+                 WSG_FDEV_SOURCE_MAX >> 10);
+        return -EFBIG;
+    }
+    *out = buf;
+    *n = got;
+    return 0;
+}
+
+int wsg_fdev_open(struct wsg_fdev **out, struct wsg_fingers *fs, int i,
+                  const char *path, const char *src, size_t n,
+                  const char *name, size_t memory, char *err, size_t errcap)
+{
+    struct wsg_fdev *m;
+    lua_Number size = 0;
+    int r;
+
+    *out = NULL;
+    if (i < 0 || i >= WSG_FINGER_COUNT) {
+        snprintf(err, errcap, "a finger is 0 or 1");
+        return -EINVAL;
+    }
+    m = calloc(1, sizeof *m);
+    if (!m) {
+        snprintf(err, errcap, "out of memory");
+        return -ENOMEM;
+    }
+    m->fs = fs;
+    m->finger = i;
+    m->cap = memory ? memory : WSG_FDEV_MEMORY;
+    if (path) {
+        const char *base = strrchr(path, '/');
+
+        r = fdev_read(path, &m->src, &m->srclen, err, errcap);
+        if (r < 0)
+            goto fail;
+        snprintf(m->name, sizeof m->name, "@%s", base ? base + 1 : path);
+    } else {
+        if (n > WSG_FDEV_SOURCE_MAX) {
+            snprintf(err, errcap, "larger than %u KiB",
+                     WSG_FDEV_SOURCE_MAX >> 10);
+            r = -EFBIG;
+            goto fail;
+        }
+        m->src = malloc(n ? n : 1);
+        if (!m->src) {
+            snprintf(err, errcap, "out of memory");
+            r = -ENOMEM;
+            goto fail;
+        }
+        memcpy(m->src, src, n);
+        m->srclen = n;
+        snprintf(m->name, sizeof m->name, "=%s", name ? name : "model");
+    }
+    /* Compiled and run once now, for its errors and its DATA_SIZE; the
+     * finger's power-on runs it afresh. */
+    if (fdev_start(m) < 0) {
+        snprintf(err, errcap, "%s", m->error);
+        r = -EINVAL;
+        goto fail;
+    }
+    lua_getglobal(m->L, "DATA_SIZE");
+    if (lua_type(m->L, -1) == LUA_TNUMBER)
+        size = lua_tonumber(m->L, -1);
+    lua_pop(m->L, 1);
+    fdev_stop(m);
+    if (!(size >= 0 && size <= WSG_FINGER_DATA_MAX)) {
+        snprintf(err, errcap, "%s: DATA_SIZE must be 0..%u", m->name,
+                 WSG_FINGER_DATA_MAX);
+        r = -EINVAL;
+        goto fail;
+    }
+    wsg_finger_attach(fs, i, &fdev_link, m, (uint16_t)size);
+    *out = m;
+    return 0;
+fail:
+    free(m->src);
+    free(m);
+    return r;
+}
+
+void wsg_fdev_close(struct wsg_fdev *m)
+{
+    if (!m)
+        return;
+    if (m->fs->f[m->finger].link_ctx == m)
+        wsg_finger_attach(m->fs, m->finger, NULL, NULL, 0);
+    fdev_stop(m);
+    free(m->src);
+    free(m);
+}
+
+const char *wsg_fdev_error(const struct wsg_fdev *m)
+{
+    return m->error;
+}
+
+const char *wsg_fdev_name(const struct wsg_fdev *m)
+{
+    return m->name + 1;
+}
+
+size_t wsg_fdev_memory(const struct wsg_fdev *m)
+{
+    return m->memory;
+}
