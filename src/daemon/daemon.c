@@ -414,6 +414,7 @@ int wsg_daemon_open(struct wsg_daemon *d)
             fprintf(stderr, "wsgemu: %s\n", err);
             return r;
         }
+        wsg_control_set_capture(d->control, &d->capture);
     }
     if (d->opt.web_enabled) {
         char err[WSG_TRANSPORT_ERR_MAX];
