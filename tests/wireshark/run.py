@@ -8,7 +8,7 @@ TCP every command the schema has (schema_dump lists them, so rows added
 to include/wsg/schema.h are covered with no change here), an auto-update
 stream, a packet split over two writes, two packets in one write, a packet
 with a bad checksum and a script command ID (B0h); over UDP a few
-requests; and on a second emulator with --text-interface on a GCL session,
+requests; on its serial line (--pty) one; and on a second emulator with --text-interface on a GCL session,
 captured from the control channel's "capture start FILE" to its "capture
 stop".
 Every packet sent and received is kept as bytes, in order. Then Debian's
@@ -29,6 +29,7 @@ import shutil
 import signal
 import socket
 import struct
+import termios
 import subprocess
 import sys
 import time
@@ -188,7 +189,7 @@ def port_of(addr):
 
 # ---- the session ---------------------------------------------------------
 
-def binary_session(schema, table, tcp_port, udp_port):
+def binary_session(schema, table, tcp_port, udp_port, pty_path):
     """Returns (sent, received) per link: {"tcp": ([...], [...]), ...}."""
     s = socket.create_connection(("127.0.0.1", tcp_port), 10 * SCALE)
     s.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
@@ -271,7 +272,26 @@ def binary_session(schema, table, tcp_port, udp_port):
         else:
             fail("no UDP answer to %02Xh" % cid)
     u.close()
-    return {"tcp": (sent, rx.frames, bad), "udp": (usent, urx.frames, set())}
+
+    # The serial line: its records carry their direction in the flags.
+    fd = os.open(pty_path, os.O_RDWR | os.O_NOCTTY)
+    attrs = termios.tcgetattr(fd)
+    attrs[0] = attrs[1] = attrs[3] = 0  # raw: no input, output, local modes
+    attrs[2] = termios.CS8 | termios.CREAD | termios.CLOCAL
+    termios.tcsetattr(fd, termios.TCSANOW, attrs)
+    prx = Frames()
+    psent = [frame(width or probe, b"", table)]
+    os.write(fd, psent[0])
+    end = time.monotonic() + 10 * SCALE
+    while not prx.frames and time.monotonic() < end:
+        r, _, _ = select.select([fd], [], [], end - time.monotonic())
+        if r:
+            prx.feed(os.read(fd, 4096))
+    os.close(fd)
+    if not prx.frames:
+        fail("no answer on the pty")
+    return {"tcp": (sent, rx.frames, bad), "udp": (usent, urx.frames, set()),
+            "pty": (psent, prx.frames, set())}
 
 
 def gcl_session(port):
@@ -322,12 +342,13 @@ def fields_of(proto):
 
 def pdus(root):
     """Per link ("tcp" or "udp"), the WSG packets in order as dicts."""
-    links = {"tcp": [], "udp": [], "reassembled": 0}
+    links = {"tcp": [], "udp": [], "pty": [], "reassembled": 0}
     for pkt in root.iter("packet"):
         protos = [p.get("name") for p in pkt.findall("proto")]
         if any(f.get("name") == "tcp.segment" for f in pkt.iter("field")):
             links["reassembled"] += 1
-        link = "udp" if "udp" in protos else "tcp"
+        link = ("udp" if "udp" in protos else
+                "tcp" if "tcp" in protos else "pty")
         num = None
         for p in pkt.findall("proto"):
             if p.get("name") == "frame":
@@ -460,17 +481,18 @@ def main():
     table = crc_table()
     cap = os.path.join(work, "binary.pcapng")
     p, ready = start(wsgemu, ["--tcp", "127.0.0.1:0", "--udp",
-                              "127.0.0.1:0:source", "--capture", cap,
+                              "127.0.0.1:0:source", "--pty",
+                              os.path.join(work, "tty"), "--capture", cap,
                               "--time-scale", "20"])
     try:
         links = binary_session(schema, table, port_of(ready["tcp"]),
-                               port_of(ready["udp"]))
+                               port_of(ready["udp"]), ready["pty"])
     finally:
         stop(p)
     root = tshark(cap, lua, port_of(ready["tcp"]), port_of(ready["udp"]))
     got = pdus(root)
     streamed = 0
-    for link in ("tcp", "udp"):
+    for link in ("tcp", "udp", "pty"):
         streamed += compare(schema, links[link], got[link], link)
     if streamed < 2:
         fail("only %d stream packets shown as unsolicited" % streamed)
