@@ -70,6 +70,9 @@ if [ "$test_deps" = 1 ]; then
     # scripts/wheel.sh (the python_wheel test) builds the wheel with
     # Debian's own pip (`/usr/bin/python3 -m pip wheel`), not a venv's.
     pkgs="$pkgs python3-pip"
+    # The Wireshark dissector's test (tests/wireshark/run.py) decodes the
+    # emulator's captures with Debian's tshark.
+    pkgs="$pkgs tshark"
     # The web page's browser tests (tests/browser/run.sh): Debian's Chromium,
     # headless, driven through WebDriver by chromium-driver and Debian's
     # python3-selenium.

@@ -258,6 +258,30 @@ def test_a_failing_tests_report_shows_the_daemons_log(pytester,
     assert out.count("communication log") == 1
 
 
+def test_a_failing_tests_capture_is_kept_and_named(pytester, wsgemu_binary,
+                                                  tmp_path):
+    captures = tmp_path / "captures"
+    pytester.makepyfile(test_user="""
+        def test_fails(wsgemu):
+            assert wsgemu.gripper.width() < 0
+
+        def test_passes(wsgemu):
+            wsgemu.gripper.width()
+    """)
+    result = _run(pytester, wsgemu_binary, "-rA",
+                  "--wsgemu-captures=%s" % captures)
+    result.assert_outcomes(failed=1, passed=1)
+    result.stdout.fnmatch_lines(["*- wsgemu: capture -*",
+                                 "*test_fails.pcapng (* bytes of pcapng*"])
+    # Only the failing test's is kept: a pcapng file (its Section Header
+    # Block) holding the request's bytes (43h: AA AA AA 43 00 00).
+    kept = list(captures.iterdir())
+    assert [k.name for k in kept] == ["test_user.py_test_fails.pcapng"]
+    data = kept[0].read_bytes()
+    assert data[:4] == b"\x0a\x0d\x0d\x0a"
+    assert b"\xaa\xaa\xaa\x43\x00\x00" in data
+
+
 def test_session_fixture_is_one_daemon_for_all_tests(pytester,
                                                      wsgemu_binary,
                                                      tmp_path):

@@ -268,6 +268,9 @@ class Emulator(_Clients):
     answers to another free port (free_udp_port), not the fixed 1501.
     ``comm_log=True``: the daemon writes its communication log (``--log``)
     to a temporary file; comm_log_text() reads it.
+    ``capture=True``: the daemon captures every interface's traffic as
+    pcapng (``--capture``) to a temporary file, ``capture_path`` while it
+    runs (save_capture() copies it); removed when the daemon stops.
     """
 
     def __init__(self, binary: Optional[str] = None,
@@ -275,7 +278,8 @@ class Emulator(_Clients):
                  interfaces: Sequence[str] = ("--tcp", "127.0.0.1:0",
                                               "--control", "127.0.0.1:0"),
                  script: Optional[Union[str, "os.PathLike[str]"]] = None,
-                 udp: bool = False, comm_log: bool = False):
+                 udp: bool = False, comm_log: bool = False,
+                 capture: bool = False):
         super().__init__()
         self.binary = find_binary(binary)
         self.script = (None if script is None
@@ -288,6 +292,12 @@ class Emulator(_Clients):
             fd, self._log = tempfile.mkstemp(prefix="wsgemu-log-")
             os.close(fd)
             self.argv += ["--log", self._log]
+        self.capture_path: Optional[str] = None
+        if capture:
+            fd, self.capture_path = tempfile.mkstemp(prefix="wsgemu-",
+                                                     suffix=".pcapng")
+            os.close(fd)
+            self.argv += ["--capture", self.capture_path]
         self.argv += args
         if self.script is not None:
             self.argv += ["--script", self.script]
@@ -338,6 +348,18 @@ class Emulator(_Clients):
                 return f.read().decode("utf-8", "replace")
         except OSError:
             return ""
+
+    def save_capture(self, path: str) -> int:
+        """Copy the capture so far (capture=True) to path; its size in
+        bytes, 0 when there is none. The daemon writes it out after each
+        batch of events, so what a test saw answered is in it."""
+        if self.capture_path is None:
+            return 0
+        try:
+            shutil.copyfile(self.capture_path, path)
+            return os.path.getsize(path)
+        except OSError:
+            return 0
 
     def _fail(self, what: str) -> DaemonError:
         err = self.stderr_text().strip()
@@ -452,6 +474,12 @@ class Emulator(_Clients):
             except OSError:
                 pass
             self._log = None
+        if self.capture_path is not None:
+            try:
+                os.unlink(self.capture_path)
+            except OSError:
+                pass
+            self.capture_path = None
 
     def stop(self, timeout: float = 10.0) -> int:
         """Close the clients, send SIGTERM and wait; the exit status.

@@ -39,7 +39,11 @@ test such a script, run it with ``control.script_run``).
 The daemon keeps a communication log (``--log`` to a temporary file); when
 a test that uses the fixture fails, its report gets two sections, the
 daemon's stderr and the log's last lines, as fixtures of databases and
-containers show theirs. ``@pytest.mark.wsgemu_udp`` adds UDP on a free
+containers show theirs. It also captures every interface's traffic
+(``--capture``); a failing test's capture is kept, as
+``DIR/<test>.pcapng`` with DIR from ``--wsgemu-captures=DIR`` (else
+``wsgemu-captures`` in the system's temporary directory), and its report
+names the file, which Wireshark opens (the dissector wsg.lua decodes it). ``@pytest.mark.wsgemu_udp`` adds UDP on a free
 port answering to another free port.
 
 ``wsgemu_session``: one daemon for the whole session (ini arguments and
@@ -55,6 +59,8 @@ is skipped, saying why.
 """
 
 import os
+import re
+import tempfile
 from typing import Any, Generator, List, Optional, Union
 
 import pytest
@@ -91,6 +97,11 @@ def pytest_addoption(parser: pytest.Parser) -> None:
                     metavar="HOST:PORT[,control=HOST:PORT]", default=None,
                     help="start no daemon: the fixtures use the one running "
                          "there (default: $WSGEMU_ATTACH)")
+    group.addoption("--wsgemu-captures", dest="wsgemu_captures",
+                    metavar="DIR", default=None,
+                    help="where a failing test's capture of the daemon's "
+                         "traffic (pcapng) is kept (default: "
+                         "wsgemu-captures in the temporary directory)")
     parser.addini("wsgemu_args", type="args", default=[],
                   help="extra arguments for every daemon the wsgemu "
                        "fixture starts")
@@ -178,7 +189,8 @@ def _start(config: pytest.Config, args: List[str], script: Optional[str],
         emu = Emulator(binary, args,
                        ready_timeout=float(
                            config.getini("wsgemu_ready_timeout")),
-                       script=script, udp=udp, comm_log=True)
+                       script=script, udp=udp, comm_log=True,
+                       capture=True)
         emu.start()
         failure = _script_failure(emu)
     except (DaemonError, ControlError, OSError) as e:
@@ -252,6 +264,21 @@ def wsgemu_session(request: pytest.FixtureRequest
         _stop(emu)
 
 
+def _capture_file(item: pytest.Item, fixture: str) -> Optional[str]:
+    """Where a failing test's capture is kept: DIR/<test>[-<fixture>].pcapng,
+    the test's node ID made a file name."""
+    where = item.config.getoption("wsgemu_captures") or os.path.join(
+        tempfile.gettempdir(), "wsgemu-captures")
+    try:
+        os.makedirs(where, exist_ok=True)
+    except OSError:
+        return None
+    base = re.sub(r"[^A-Za-z0-9_.-]+", "_", item.nodeid).strip("_")[:180]
+    if fixture != "wsgemu":
+        base += "-" + fixture
+    return os.path.join(where, base + ".pcapng")
+
+
 # pytest's hookimpl is untyped (pytest 7): the ignore keeps --strict from
 # taking the hook for untyped.
 @pytest.hookimpl(hookwrapper=True)  # type: ignore[misc]
@@ -279,3 +306,12 @@ def pytest_runtest_makereport(item: pytest.Item, call: pytest.CallInfo[None]
                     if len(shown) < len(log) else "")
             report.sections.append(("%s: communication log" % name,
                                     head + "\n".join(shown)))
+        if isinstance(emu, Emulator) and emu.capture_path:
+            path = _capture_file(item, name)
+            size = emu.save_capture(path) if path else 0
+            if size:
+                report.sections.append((
+                    "%s: capture" % name,
+                    "%s (%d bytes of pcapng: wireshark -X "
+                    "lua_script:wsg.lua %s, or with wsg.lua installed)"
+                    % (path, size, path)))

@@ -34,6 +34,7 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include "capture.h"
 #include "gripper.h"
 #include "peer.h"
 #include "state.h"
@@ -68,6 +69,10 @@ struct wsg_ctl {
     struct wsg_reactor *reactor;
     struct wsg_sched *sched;
     struct wsg_gripper *cur; /* the line being run acts on this one */
+    /* The daemon's capture, which `capture` starts and stops; NULL: the
+     * command is refused (the web page's channel has none: a page must
+     * not write files). */
+    struct wsg_capture *capture;
     char local[WSG_ADDR_LEN];
     struct wsg_peer_set clients;
 };
@@ -713,6 +718,44 @@ static void script_output(struct ctl_ctx *c, struct wsg_script *h,
     reply(c, "ok %s", buf);
 }
 
+/* capture start FILE | stop | (status): the capture of every interface
+ * (capture.h). FILE is opened by the daemon, relative to its directory. */
+static void cmd_capture(struct ctl_ctx *c, int argc, char **argv)
+{
+    struct wsg_capture *cap = c->ctl->capture;
+
+    if (!cap) {
+        reply(c, "error capture: not available here");
+        return;
+    }
+    if (argc == 3 && strcmp(argv[1], "start") == 0) {
+        char err[WSG_CTL_LINE_MAX + 128];
+
+        if (wsg_capture_start(cap, argv[2], err, sizeof err) < 0)
+            reply(c, "error %s", err);
+        else
+            reply(c, "ok capture %s", cap->path);
+    } else if (argc == 2 && strcmp(argv[1], "stop") == 0) {
+        uint64_t n = cap->records;
+        int was = cap->f != NULL;
+
+        wsg_capture_stop(cap);
+        if (was)
+            reply(c, "ok capture stopped %llu records", (unsigned long long)n);
+        else
+            reply(c, "ok capture off");
+    } else if (argc == 1) {
+        if (!cap->f)
+            reply(c, "ok capture off");
+        else
+            reply(c, "ok capture %s records %llu bytes %llu%s", cap->path,
+                  (unsigned long long)cap->records,
+                  (unsigned long long)cap->size, cap->full ? " stopped" : "");
+    } else {
+        reply(c, "error usage: capture [start FILE|stop]");
+    }
+}
+
 static void cmd_script(struct ctl_ctx *c, int argc, char **argv)
 {
     struct wsg_gripper *g = c->ctl->cur;
@@ -818,6 +861,7 @@ static const struct ctl_command {
     {"gripper", cmd_gripper, 1, "gripper [N]"},
     {"stats", cmd_stats, 0, "stats"},
     {"script", cmd_script, 1, "script run FILE|stop|status|output [FROM]"},
+    {"capture", cmd_capture, 1, "capture [start FILE|stop]"},
     {"help", cmd_help, 0, NULL},
 };
 
@@ -998,6 +1042,11 @@ void wsg_control_close(struct wsg_ctl *ctl)
         close(ctl->watch.fd);
     }
     free(ctl);
+}
+
+void wsg_control_set_capture(struct wsg_ctl *ctl, struct wsg_capture *cap)
+{
+    ctl->capture = cap;
 }
 
 int wsg_control_new(struct wsg_ctl **out, struct wsg_reactor *reactor,

@@ -66,6 +66,10 @@ void wsg_control_input(struct wsg_ctl *ctl, struct wsg_ctl_session *s,
 int wsg_control_open(struct wsg_ctl **out, struct wsg_reactor *reactor,
                      struct wsg_sched *sched, const struct wsg_endpoint *ep,
                      char *err, size_t errlen);
+struct wsg_capture;
+/* Let `capture start FILE|stop` act on cap (without it the command is
+ * refused: the web page's channel). */
+void wsg_control_set_capture(struct wsg_ctl *ctl, struct wsg_capture *cap);
 /* The address it listens on, for the ready line. */
 int wsg_control_describe(const struct wsg_ctl *ctl, char *buf, size_t len);
 /* Close every client and the socket (if any); safe on NULL. */

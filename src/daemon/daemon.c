@@ -42,6 +42,11 @@ static struct wsg_session *gripper_lookup(void *ctx, uint32_t tag)
     return wsg_transport_lookup(g->transports, g->ntransports, tag);
 }
 
+static void daemon_capture_flush(void *ctx)
+{
+    wsg_capture_flush(ctx);
+}
+
 static void daemon_log_flush(void *ctx)
 {
     wsg_log_flush(ctx);
@@ -105,6 +110,7 @@ static int open_transport(struct wsg_gripper *g,
     t->host.leave = gripper_leave;
     t->host.defer = gripper_defer;
     t->host.ctx = g;
+    t->tap = &g->capture.tap;
     err[0] = '\0';
     r = ops->open(t, env, cfg, err, sizeof err);
     if (r < 0) {
@@ -231,6 +237,8 @@ static int open_gripper(struct wsg_daemon *d, struct wsg_gripper *g,
     if (d->log.f || d->opt.web_enabled)
         wsg_log_attach(&d->log, &g->tap, &g->dev,
                        d->opt.grippers > 1 ? (int)index : -1);
+    wsg_capture_tap_init(&g->capture, &d->capture, &g->dev,
+                         d->opt.grippers > 1 ? (int)index : -1);
     g->dev.lookup = gripper_lookup;
     g->dev.lookup_ctx = g;
     g->runner = &d->runner;
@@ -375,7 +383,10 @@ static int open_services(struct wsg_daemon *d)
         return r;
     if (d->log.f)
         r = wsg_reactor_after(&d->reactor, daemon_log_flush, &d->log);
-    return r;
+    if (r < 0)
+        return r;
+    /* Always: the control channel may start a capture later. */
+    return wsg_reactor_after(&d->reactor, daemon_capture_flush, &d->capture);
 }
 
 int wsg_daemon_open(struct wsg_daemon *d)
@@ -411,6 +422,17 @@ int wsg_daemon_open(struct wsg_daemon *d)
             return r;
         }
         wsg_log_limit(&d->log, d->opt.log_max);
+    }
+    d->capture.max = d->opt.capture_max;
+    if (d->opt.capture_path) {
+        char err[WSG_CAPTURE_PATH_MAX + 128];
+
+        r = wsg_capture_start(&d->capture, d->opt.capture_path, err,
+                              sizeof err);
+        if (r < 0) {
+            fprintf(stderr, "wsgemu: %s\n", err);
+            return r;
+        }
     }
     d->rx = malloc(WSG_DAEMON_RX_MAX);
     if (!d->rx) {
@@ -460,6 +482,7 @@ int wsg_daemon_open(struct wsg_daemon *d)
             fprintf(stderr, "wsgemu: %s\n", err);
             return r;
         }
+        wsg_control_set_capture(d->control, &d->capture);
     }
     if (d->opt.web_enabled) {
         char err[WSG_TRANSPORT_ERR_MAX];
@@ -654,6 +677,7 @@ void wsg_daemon_close(struct wsg_daemon *d)
             wsg_log_detach(&d->grippers[i].tap, &d->grippers[i].dev);
     }
     wsg_log_close(&d->log);
+    wsg_capture_stop(&d->capture);
     free(d->grippers);
     d->grippers = NULL;
 }

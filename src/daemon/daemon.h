@@ -12,6 +12,7 @@
 
 #include <stdint.h>
 
+#include "capture.h"
 #include "control.h"
 #include "fswatch.h"
 #include "gripper.h"
@@ -39,6 +40,8 @@ struct wsg_daemon {
     struct wsg_ctl *control; /* NULL: no control channel */
     struct wsg_web *web;     /* NULL: no web page */
     struct wsg_log log; /* the communication log (--log); closed: f NULL */
+    /* --capture, or the control channel's capture start; off: on 0. */
+    struct wsg_capture capture;
 };
 
 /* Block the signals the daemon handles (SIGINT, SIGTERM, SIGHUP): first

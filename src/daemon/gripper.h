@@ -23,6 +23,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "capture.h"
 #include "delay.h"
 #include "fdev.h"
 #include "log.h"
@@ -44,7 +45,8 @@ struct wsg_gripper {
     size_t heap_idx;
     struct wsg_gripper *next_touched;
     uint8_t touched;
-    struct wsg_log_tap tap; /* the communication log's view of it */
+    struct wsg_log_tap tap;         /* the communication log's view of it */
+    struct wsg_capture_tap capture; /* what its transports show the capture */
     /* --latency: delay[i] holds what transports[i] is to send; NULL
      * without a latency, so a fleet pays nothing for the option. */
     struct wsg_delay *delay;

@@ -893,6 +893,26 @@ static const struct wsg_setting settings[] = {
              "FILE.old (replacing it) and a new\n"
              "one begins ({range}, default\n"
              "{default}; 0: no bound)"},
+    {.name = "capture",
+     .type = WSG_SETTING_TEXT,
+     .at = WSG_AT(capture_path),
+     .section = WSG_SECTION_EMULATOR,
+     .arg = "FILE",
+     .help = "write what every interface receives\n"
+             "and sends to FILE as pcapng, for\n"
+             "Wireshark (wsg.lua decodes it)"},
+    /* A capture left running on a CI machine must not fill its disk. */
+    {.name = "capture-max",
+     .type = WSG_SETTING_UINT,
+     .at = WSG_AT(capture_max),
+     .min = 0,
+     .max = 4294967295.0,
+     .unit = "bytes",
+     .def = "268435456",
+     .section = WSG_SECTION_EMULATOR,
+     .arg = "BYTES",
+     .help = "a capture stops at BYTES ({range},\n"
+             "default {default}; 0: no bound)"},
     {.name = "config",
      .type = WSG_SETTING_CONFIG,
      .at = WSG_AT(config_path),

@@ -78,6 +78,8 @@ struct wsg_options {
     double time_scale;           /* simulated seconds per real second */
     const char *log_path;        /* NULL: no log; "-": stderr */
     uint32_t log_max;            /* --log-max: bytes a log file may reach */
+    const char *capture_path;    /* --capture FILE; NULL: none at start */
+    uint32_t capture_max;        /* --capture-max: bytes a capture may reach */
     const char *config_path;     /* --config FILE, read before the options */
     struct wsg_model_value initial_part; /* --part WIDTH */
     double initial_part_stiffness;       /* N/mm; 0: the model's default */

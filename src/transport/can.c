@@ -230,6 +230,14 @@ static void can_packet(struct wsg_session *s, const uint8_t *pkt, size_t len)
         f[n].can_dlc = (uint8_t)chunk;
         memcpy(f[n].data, pkt + off, chunk);
     }
+    if (can->t->tap && *can->t->tap->on) {
+        struct wsg_tap_flow tf = {.kind = WSG_TAP_CAN, .can_id = can->tx_id};
+
+        for (i = 0; i < n; i++)
+            wsg_transport_tap(can->t, &tf, WSG_TAP_OUT, f[i].data,
+                              f[i].can_dlc);
+        i = 0;
+    }
     /* Behind queued frames a packet must wait its turn, or its frames would
      * land in the middle of an earlier packet's. */
     if (can->qlen == 0) {
@@ -259,6 +267,13 @@ static void can_frame_in(struct wsg_can *can, const struct can_frame *f)
         return;
     if ((f->can_id & CAN_SFF_MASK) != can->rx_id)
         return;
+    if (can->t->tap && *can->t->tap->on) {
+        struct wsg_tap_flow tf = {.kind = WSG_TAP_CAN, .can_id = can->rx_id};
+
+        wsg_transport_tap(can->t, &tf, WSG_TAP_IN, f->data,
+                          f->can_dlc > WSG_CAN_DATA_MAX ? WSG_CAN_DATA_MAX
+                                                        : f->can_dlc);
+    }
     if (dlc > WSG_CAN_DATA_MAX)
         dlc = WSG_CAN_DATA_MAX;
     gap_ms = (now - can->last_rx_ns) / 1000000u;

@@ -76,7 +76,8 @@ struct wsg_pty {
     char slave[WSG_PTY_SLAVE_LEN];
     struct wsg_parser parser;
     struct wsg_session session;
-    struct wsg_outq out; /* last: its buffer needs no initial value */
+    struct wsg_tap_flow flow; /* what the capture sees of it */
+    struct wsg_outq out;      /* last: its buffer needs no initial value */
 };
 
 static void report_drops(struct wsg_pty *pty)
@@ -151,6 +152,7 @@ static void pty_packet(struct wsg_session *s, const uint8_t *pkt, size_t len)
     /* Nobody has the port open: the packet is lost on the line. */
     if (!pty->active || pty->hup)
         return;
+    wsg_transport_tap(pty->t, &pty->flow, WSG_TAP_OUT, pkt, len);
     sent(pty, wsg_outq_send(&pty->out, pty->master.fd, pkt, len));
 }
 
@@ -173,6 +175,7 @@ static void read_input(struct wsg_pty *pty, int closing)
         ssize_t n = read(pty->master.fd, buf, sizeof buf);
 
         if (n > 0) {
+            wsg_transport_tap(pty->t, &pty->flow, WSG_TAP_IN, buf, (size_t)n);
             wsg_device_input(pty->dev, &pty->session, &pty->parser, buf,
                              (size_t)n);
             continue;
@@ -442,6 +445,7 @@ static int pty_open(struct wsg_transport *t,
     wsg_transport_watch_init(t, &pty->notify, -1);
     pty->wd = -1;
     pty->t = t;
+    pty->flow.kind = WSG_TAP_PTY;
     pty->reactor = env->reactor;
     pty->fswatch = env->fswatch;
     pty->dev = env->dev;

@@ -79,6 +79,7 @@ struct wsg_tcp_conn {
     struct wsg_parser parser;
     struct wsg_gcl gcl; /* --text-interface: lines instead of packets */
     struct wsg_session session;
+    struct wsg_tap_flow flow; /* what the capture sees of it */
     struct wsg_peer peer; /* last: the set allocates the struct around it */
 };
 
@@ -117,12 +118,15 @@ static void conn_packet(struct wsg_session *s, const uint8_t *pkt, size_t len)
 {
     struct wsg_tcp_conn *c = s->ctx;
 
+    if (!c->peer.dead)
+        wsg_transport_tap(c->tcp->t, &c->flow, WSG_TAP_OUT, pkt, len);
     wsg_peer_send(&c->peer, pkt, len);
 }
 
 /* Bytes from the client: to the interpreter or the device. */
 static void conn_feed(struct wsg_tcp_conn *c, const uint8_t *buf, size_t n)
 {
+    wsg_transport_tap(c->tcp->t, &c->flow, WSG_TAP_IN, buf, n);
     if (c->text)
         wsg_gcl_input(&c->gcl, buf, n);
     else
@@ -198,6 +202,7 @@ static void conn_closed(struct wsg_peer *p, void *ctx)
             conn_drain(c);
         wsg_device_session_closed(tcp->dev, &c->session);
     }
+    wsg_transport_tap(tcp->t, &c->flow, WSG_TAP_CLOSE, NULL, 0);
     tcp->refused = 0;
 }
 
@@ -276,6 +281,17 @@ static void conn_accept(struct wsg_tcp *tcp, int fd,
                 strerror(errno));
     c = conn_of(p);
     c->tcp = tcp;
+    {
+        /* The address the client reached, which a listener on 0.0.0.0
+         * does not tell. */
+        struct sockaddr_in local;
+        socklen_t llen = sizeof local;
+
+        if (getsockname(fd, (struct sockaddr *)&local, &llen) < 0)
+            memset(&local, 0, sizeof local);
+        wsg_tap_flow_addrs(&c->flow, WSG_TAP_TCP, &local, addr);
+        wsg_transport_tap(tcp->t, &c->flow, WSG_TAP_OPEN, NULL, 0);
+    }
     wsg_parser_init(&c->parser, tcp->check_crc);
     wsg_session_init(&c->session, conn_tag(tcp, p), WSG_SESSION_CONNECTION,
                      conn_packet, c);

@@ -151,3 +151,18 @@ fail:
         close(fd);
     return r;
 }
+
+void wsg_tap_flow_addrs(struct wsg_tap_flow *f, enum wsg_tap_kind kind,
+                        const struct sockaddr_in *local,
+                        const struct sockaddr_in *peer)
+{
+    f->kind = (uint8_t)kind;
+    if (local) {
+        memcpy(f->local_ip, &local->sin_addr.s_addr, 4);
+        f->local_port = ntohs(local->sin_port);
+    }
+    if (peer) {
+        memcpy(f->peer_ip, &peer->sin_addr.s_addr, 4);
+        f->peer_port = ntohs(peer->sin_port);
+    }
+}

@@ -95,6 +95,36 @@ struct wsg_transport_settings {
     int text;      /* TCP: GCL instead of the binary protocol */
 };
 
+/* A view of the bytes a transport receives and sends, as they cross its
+ * descriptors (the capture, --capture): a tap is called with each read's
+ * bytes and each packet written (queued or not), and when a TCP connection
+ * opens and closes. The transport owns the flow; the tap keeps what it
+ * needs of a connection's history (TCP sequence numbers) in its tap_seq,
+ * so the tap holds no table of its own. */
+enum wsg_tap_kind { WSG_TAP_TCP = 1, WSG_TAP_UDP, WSG_TAP_PTY, WSG_TAP_CAN };
+enum wsg_tap_event {
+    WSG_TAP_IN,   /* bytes the gripper received */
+    WSG_TAP_OUT,  /* bytes the gripper sent */
+    WSG_TAP_OPEN, /* a TCP connection was accepted */
+    WSG_TAP_CLOSE /* it ends */
+};
+struct wsg_tap_flow {
+    uint8_t kind;        /* enum wsg_tap_kind */
+    uint8_t local_ip[4]; /* TCP, UDP: a.b.c.d in this order */
+    uint8_t peer_ip[4];  /* TCP, UDP */
+    uint16_t local_port; /* host order */
+    uint16_t peer_port;  /* UDP: the datagram's source, or where the
+                            answer goes */
+    uint32_t can_id;     /* CAN: the frame's identifier */
+    uint32_t tap_seq[2]; /* the tap's: bytes seen in and out */
+};
+struct wsg_tap {
+    void (*fn)(void *ctx, struct wsg_tap_flow *f, enum wsg_tap_event ev,
+               const uint8_t *data, size_t len);
+    void *ctx;
+    const int *on; /* nonzero while the tap wants anything */
+};
+
 struct wsg_transport_ops {
     const char *name; /* key on the ready line: "tcp" */
     /* Open from cfg (this transport's config struct); on failure put a
@@ -132,7 +162,23 @@ struct wsg_transport {
     void *state;       /* the transport's own struct */
     uint32_t tag_base; /* (index + 1) << WSG_TAG_TRANSPORT_SHIFT */
     struct wsg_transport_host host;
+    const struct wsg_tap *tap; /* NULL: none */
 };
+
+/* Show the tap (if one is on) an event of flow f. */
+static inline void wsg_transport_tap(const struct wsg_transport *t,
+                                     struct wsg_tap_flow *f,
+                                     enum wsg_tap_event ev,
+                                     const uint8_t *data, size_t len)
+{
+    if (t->tap && *t->tap->on)
+        t->tap->fn(t->tap->ctx, f, ev, data, len);
+}
+struct sockaddr_in;
+/* Fill a flow's addresses from socket addresses (either may be NULL). */
+void wsg_tap_flow_addrs(struct wsg_tap_flow *f, enum wsg_tap_kind kind,
+                        const struct sockaddr_in *local,
+                        const struct sockaddr_in *peer);
 
 /* A watch of t on fd: its events go to t->ops->handle, between the host's
  * enter and leave. */

@@ -55,7 +55,9 @@ struct wsg_udp {
     struct wsg_watch watch;
     struct wsg_device *dev;
     struct wsg_reactor *reactor;
-    uint8_t *rx; /* the shared receive buffer */
+    struct wsg_transport *t;
+    struct sockaddr_in bound; /* where it listens (the capture's address) */
+    uint8_t *rx;              /* the shared receive buffer */
     size_t rxlen;
     uint32_t tag_base;
     int check_crc;
@@ -74,6 +76,12 @@ static void udp_packet(struct wsg_session *s, const uint8_t *pkt, size_t len)
     struct wsg_udp_peer *p = s->ctx;
     ssize_t n;
 
+    if (p->udp->t->tap && *p->udp->t->tap->on) {
+        struct wsg_tap_flow f = {0};
+
+        wsg_tap_flow_addrs(&f, WSG_TAP_UDP, &p->udp->bound, &p->to);
+        wsg_transport_tap(p->udp->t, &f, WSG_TAP_OUT, pkt, len);
+    }
     n = sendto(p->udp->watch.fd, pkt, len, MSG_DONTWAIT | MSG_NOSIGNAL,
                (const struct sockaddr *)&p->to, sizeof p->to);
     if (n != (ssize_t)len)
@@ -147,6 +155,12 @@ static void udp_handle(struct wsg_transport *t, struct wsg_watch *w,
         }
         if (flen < sizeof from || from.sin_family != AF_INET)
             continue;
+        if (t->tap && *t->tap->on) {
+            struct wsg_tap_flow f = {0};
+
+            wsg_tap_flow_addrs(&f, WSG_TAP_UDP, &udp->bound, &from);
+            wsg_transport_tap(t, &f, WSG_TAP_IN, udp->rx, (size_t)n);
+        }
         p = udp_peer(udp, &from);
         p->heard = ++udp->clock;
         wsg_device_input_datagram(udp->dev, &p->session, udp->check_crc,
@@ -210,6 +224,7 @@ static int udp_open(struct wsg_transport *t,
         goto fail;
     }
     t->state = udp;
+    udp->t = t;
     udp->dev = env->dev;
     udp->reactor = env->reactor;
     udp->rx = env->rx;
@@ -226,6 +241,7 @@ static int udp_open(struct wsg_transport *t,
         goto fail_errno;
     if (getsockname(udp->watch.fd, (struct sockaddr *)&sa, &salen) < 0)
         goto fail_errno;
+    udp->bound = sa;
     snprintf(udp->local, sizeof udp->local, "%s:%u", ip,
              (unsigned)ntohs(sa.sin_port));
     r = wsg_reactor_add(udp->reactor, &udp->watch, EPOLLIN);

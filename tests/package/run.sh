@@ -305,7 +305,8 @@ n=$(grep -c '^[a-z-]* = ' "$S/all.conf") || true
 echo "    $n settings"
 start_emu all "$P/bin/wsgemu" --config "$S/all.conf" \
     --tcp 127.0.0.1:0 --udp 127.0.0.1:0:1501 --pty "$S/tty" \
-    --pty-group "$(id -g)" --control 127.0.0.1:0 --web 127.0.0.1:0 --log "$S/comm.log"
+    --pty-group "$(id -g)" --control 127.0.0.1:0 --web 127.0.0.1:0 --log "$S/comm.log" \
+    --capture "$S/capture.pcapng"
 echo "    $READY"
 case $READY in
 *" pty=$S/tty"*" control=127.0.0.1:"*" web=127.0.0.1:"*) ;;
