@@ -271,7 +271,7 @@ def main():
     if len(sys.argv) != 4:
         print(f"usage: {ME} SOURCE_DIR WSGEMU WSGCTL", file=sys.stderr)
         return 2
-    src, wsgemu, wsgctl = sys.argv[1:]
+    src, wsgemu, wsgctl = (os.path.abspath(a) for a in sys.argv[1:])
     emu_opts, ctl_opts = long_options(wsgemu), long_options(wsgctl)
     if "grippers" not in emu_opts or "control" not in ctl_opts:
         print(f"{ME}: FAIL: cannot read the options of --help", file=sys.stderr)
