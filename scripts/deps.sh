@@ -60,6 +60,10 @@ if [ "$test_deps" = 1 ]; then
     # podman builds and runs it; runc because crun refuses a cgroup v1/v2
     # hybrid; ip brings up loopback where the test runs the exported rootfs.
     pkgs="$pkgs podman runc iproute2"
+    # The Kubernetes manifests' tests (tests/kube): podman kube play builds
+    # its pods' infra image around catatonit; python3-yaml reads the
+    # manifests.
+    pkgs="$pkgs catatonit python3-yaml"
     # The Python client's tests (tests/python/run.sh): Debian's python3 makes a
     # venv that sees the system pytest, and pip installs python/ into it offline.
     pkgs="$pkgs python3 python3-venv python3-pytest"
