@@ -29,7 +29,12 @@ import sys
 import tempfile
 import time
 
-import yaml
+try:
+    import yaml
+except ImportError:
+    print("check.py: skipped: no python3-yaml (scripts/deps.sh --test "
+          "installs it)")
+    sys.exit(77)
 
 ME = "check.py"
 failures = []
