@@ -48,6 +48,9 @@ struct wsg_udp_peer {
     int used;
     uint64_t heard;        /* the udp->clock of its last datagram */
     struct sockaddr_in to; /* sender's IP, the remote (or source) port */
+    /* The address its last datagram came to (the capture's local side):
+     * the bound one, or, bound to every address, the one it sent to. */
+    struct sockaddr_in local;
     struct wsg_session session;
 };
 
@@ -79,7 +82,7 @@ static void udp_packet(struct wsg_session *s, const uint8_t *pkt, size_t len)
     if (p->udp->t->tap && *p->udp->t->tap->on) {
         struct wsg_tap_flow f = {0};
 
-        wsg_tap_flow_addrs(&f, WSG_TAP_UDP, &p->udp->bound, &p->to);
+        wsg_tap_flow_addrs(&f, WSG_TAP_UDP, &p->local, &p->to);
         wsg_transport_tap(p->udp->t, &f, WSG_TAP_OUT, pkt, len);
     }
     n = sendto(p->udp->watch.fd, pkt, len, MSG_DONTWAIT | MSG_NOSIGNAL,
@@ -142,26 +145,48 @@ static void udp_handle(struct wsg_transport *t, struct wsg_watch *w,
         return;
     /* Bounded, so a flood cannot starve the model's steps. */
     for (i = 0; i < WSG_UDP_DATAGRAMS_PER_EVENT; i++) {
-        struct sockaddr_in from;
-        socklen_t flen = sizeof from;
+        struct sockaddr_in from, local = udp->bound;
+        struct iovec iov = {udp->rx, udp->rxlen};
+        union {
+            char buf[CMSG_SPACE(sizeof(struct in_pktinfo))];
+            struct cmsghdr align;
+        } ctl;
+        struct msghdr mh;
+        struct cmsghdr *cm;
         struct wsg_udp_peer *p;
-        ssize_t n = recvfrom(udp->watch.fd, udp->rx, udp->rxlen, MSG_DONTWAIT,
-                             (struct sockaddr *)&from, &flen);
+        ssize_t n;
 
+        memset(&mh, 0, sizeof mh);
+        mh.msg_name = &from;
+        mh.msg_namelen = sizeof from;
+        mh.msg_iov = &iov;
+        mh.msg_iovlen = 1;
+        mh.msg_control = ctl.buf;
+        mh.msg_controllen = sizeof ctl.buf;
+        n = recvmsg(udp->watch.fd, &mh, MSG_DONTWAIT);
         if (n < 0) {
             if (errno == EINTR)
                 continue;
             return; /* EAGAIN, or an ICMP error of an earlier send */
         }
-        if (flen < sizeof from || from.sin_family != AF_INET)
+        if (mh.msg_namelen < sizeof from || from.sin_family != AF_INET)
             continue;
+        for (cm = CMSG_FIRSTHDR(&mh); cm; cm = CMSG_NXTHDR(&mh, cm)) {
+            struct in_pktinfo pi;
+
+            if (cm->cmsg_level != IPPROTO_IP || cm->cmsg_type != IP_PKTINFO)
+                continue;
+            memcpy(&pi, CMSG_DATA(cm), sizeof pi);
+            local.sin_addr = pi.ipi_addr;
+        }
         if (t->tap && *t->tap->on) {
             struct wsg_tap_flow f = {0};
 
-            wsg_tap_flow_addrs(&f, WSG_TAP_UDP, &udp->bound, &from);
+            wsg_tap_flow_addrs(&f, WSG_TAP_UDP, &local, &from);
             wsg_transport_tap(t, &f, WSG_TAP_IN, udp->rx, (size_t)n);
         }
         p = udp_peer(udp, &from);
+        p->local = local;
         p->heard = ++udp->clock;
         wsg_device_input_datagram(udp->dev, &p->session, udp->check_crc,
                                   udp->rx, (size_t)n);
@@ -242,6 +267,15 @@ static int udp_open(struct wsg_transport *t,
     if (getsockname(udp->watch.fd, (struct sockaddr *)&sa, &salen) < 0)
         goto fail_errno;
     udp->bound = sa;
+    /* Bound to every address: each datagram says which one it came to, so
+     * that a capture shows the address the peer sent to, not 0.0.0.0. */
+    if (sa.sin_addr.s_addr == htonl(INADDR_ANY)) {
+        int on = 1;
+
+        if (setsockopt(udp->watch.fd, IPPROTO_IP, IP_PKTINFO, &on, sizeof on) <
+            0)
+            goto fail_errno;
+    }
     snprintf(udp->local, sizeof udp->local, "%s:%u", ip,
              (unsigned)ntohs(sa.sin_port));
     r = wsg_reactor_add(udp->reactor, &udp->watch, EPOLLIN);

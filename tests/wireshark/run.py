@@ -349,15 +349,19 @@ def pdus(root):
             links["reassembled"] += 1
         link = ("udp" if "udp" in protos else
                 "tcp" if "tcp" in protos else "pty")
-        num = None
+        num, ip = None, {}
         for p in pkt.findall("proto"):
             if p.get("name") == "frame":
                 for f in p.iter("field"):
                     if f.get("name") == "frame.number":
                         num = int(f.get("show"))
+            if p.get("name") == "ip":
+                for f in p.iter("field"):
+                    if f.get("name") in ("ip.src", "ip.dst"):
+                        ip[f.get("name")] = f.get("show")
             if p.get("name") != "wsg":
                 continue
-            links[link].append({"frame": num, "f": fields_of(p)})
+            links[link].append({"frame": num, "f": fields_of(p), "ip": ip})
     return links
 
 
@@ -480,8 +484,10 @@ def main():
                 f["names"] = {i: n for i, n in enumerate(f["names"]) if n}
     table = crc_table()
     cap = os.path.join(work, "binary.pcapng")
+    # UDP bound to every address: the capture still shows the one each
+    # datagram came to, 127.0.0.1, not 0.0.0.0.
     p, ready = start(wsgemu, ["--tcp", "127.0.0.1:0", "--udp",
-                              "127.0.0.1:0:source", "--pty",
+                              "0.0.0.0:0:source", "--pty",
                               os.path.join(work, "tty"), "--capture", cap,
                               "--time-scale", "20"])
     try:
@@ -496,6 +502,10 @@ def main():
         streamed += compare(schema, links[link], got[link], link)
     if streamed < 2:
         fail("only %d stream packets shown as unsolicited" % streamed)
+    for d in got["udp"]:
+        if d["ip"] != {"ip.src": "127.0.0.1", "ip.dst": "127.0.0.1"}:
+            fail("udp frame %s: addresses %s, want 127.0.0.1 both ways" %
+                 (d["frame"], d["ip"]))
     if not got["reassembled"]:
         print("note: the emulator read the split packet in one piece")
     print("binary: %d requests, %d replies over TCP, %d over UDP, "
