@@ -38,7 +38,8 @@
  *   daemon gets no answer (exit 3) and still leaves it out of FAST STOP;
  *   the text daemon, too, is not in FAST STOP at the end (every close
  *   announced with BYE());
- * - the control channel's part, obstacle, fault, time, drop and reset
+ * - the control channel's part, obstacle, fault, time, capture, drop and
+ *   reset
  *   through --control, each seen in the channel's state; the channel's
  *   refusals (exit 1) and usage errors (exit 2), and none without
  *   --control or WSG_CONTROL;
@@ -650,6 +651,43 @@ static void test_channel(struct env *v, struct emu *e)
     CHECK(has(ctl_cmd(&k, "state"), "\"fast_stop\""));
     CHECK_EQ(TCP(v, "ack"), 0);
     CHECK(!has(ctl_cmd(&k, "state"), "\"fast_stop\""));
+
+    /* capture: started with a path relative to wsgctl's directory (made
+     * absolute, so the file lands there, not in the daemon's), a request
+     * captured, its state, stopped; the file is pcapng. */
+    {
+        char dir[64] = "/tmp/wsgctl-capture-XXXXXX", here[4096];
+        char file[128], magic[4] = {0};
+        FILE *f;
+
+        REQUIRE(mkdtemp(dir) != NULL);
+        REQUIRE(getcwd(here, sizeof here) != NULL);
+        REQUIRE(chdir(dir) == 0);
+        CHECK_EQ(CONTROL(v, addr, "capture", "start", "run.pcapng"), 0);
+        REQUIRE(chdir(here) == 0);
+        snprintf(file, sizeof file, "%s/run.pcapng", dir);
+        CHECK(has(v->out, file));
+        CHECK_EQ(TCP(v, "width"), 0);
+        CHECK_EQ(CONTROL(v, addr, "capture"), 0);
+        CHECK(has(v->out, file) && has(v->out, " records "));
+        CHECK_EQ(CONTROL(v, addr, "capture", "stop"), 0);
+        CHECK(has(v->out, "capture stopped ") && atoi(v->out + 16) >= 2);
+        CHECK_EQ(CONTROL(v, addr, "capture"), 0);
+        CHECK(!strcmp(v->out, "capture off\n"));
+        f = fopen(file, "rb");
+        CHECK(f != NULL);
+        if (f) {
+            CHECK_EQ(fread(magic, 1, 4, f), 4);
+            CHECK(!memcmp(magic, "\x0a\x0d\x0d\x0a", 4));
+            fclose(f);
+        }
+        unlink(file);
+        rmdir(dir);
+        CHECK_EQ(CONTROL(v, addr, "capture", "start"), 2);
+        CHECK_EQ(CONTROL(v, addr, "capture", "begin", "x"), 2);
+        CHECK_EQ(CONTROL(v, addr, "capture", "start", "a b"), 2);
+        CHECK(has(v->err, "blank"));
+    }
 
     /* reset: a power cycle, not referenced afterwards. */
     CHECK(has(ctl_cmd(&k, "state"), "\"referenced\""));

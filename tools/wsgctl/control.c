@@ -158,3 +158,25 @@ int c_channel(struct ctx *x, int argc, char **argv)
         puts(rest);
     return EXIT_OK;
 }
+
+/* capture start FILE, stop, or its state: the channel's own command, with
+ * FILE absolute (wsgctl_path) so that it lands where the user meant. */
+int c_capture(struct ctx *x, int argc, char **argv)
+{
+    char path[4096];
+    char *args[2];
+    int rc;
+
+    if (argc == 0 || strcmp(argv[0], "stop") == 0)
+        return c_channel(x, argc, argv);
+    if (strcmp(argv[0], "start") != 0 || argc != 2) {
+        err("capture: start FILE, stop, or nothing (its state)");
+        return EXIT_USAGE;
+    }
+    rc = wsgctl_path("capture start", argv[1], path, sizeof path);
+    if (rc)
+        return rc;
+    args[0] = argv[0];
+    args[1] = path;
+    return c_channel(x, 2, args);
+}

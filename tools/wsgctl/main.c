@@ -206,6 +206,11 @@ static const struct command commands[] = {
      "control channel: simulated time (seconds), its scale, pause and "
      "resume, a step of MS ms while paused",
      "wsgctl --control 127.0.0.1:2000 time pause", VIA_CONTROL},
+    {"capture", c_capture, 0, 2, 1, "[start FILE | stop]",
+     "control channel: write what every interface receives and sends to "
+     "FILE as pcapng (a relative path from here), stop, or show whether "
+     "it runs",
+     "wsgctl --control 127.0.0.1:2000 capture start run.pcapng", VIA_CONTROL},
     {"drop", c_channel, 0, 0, 1, "",
      "control channel: close every TCP connection without 07h (FAST STOP), "
      "to test a driver's reconnect",
@@ -280,9 +285,9 @@ static void usage(FILE *f)
             "safe while another\n"
             "                         client moves it; script, part, "
             "obstacle, fault,\n"
-            "                         time, drop and reset go only here "
-            "(without it:\n"
-            "                         $WSG_CONTROL)\n"
+            "                         time, capture, drop and reset go "
+            "only here\n"
+            "                         (without it: $WSG_CONTROL)\n"
             "Options (anywhere; \"--\" ends them; --opt=value as "
             "--opt value):\n"
             "  --timeout S            wait for an answer (through "
@@ -342,11 +347,12 @@ static void usage(FILE *f)
                "values (-q: the\n"
                "channel's JSON line), script output the script's text as "
                "it printed it.\n"
-               "part, obstacle, fault, time, drop and reset print the "
-               "channel's answer\n"
-               "without its \"ok\" (\"part 40 50\", \"paused\"). "
-               "Errors go to stderr with the\n"
-               "manual's names (\"wsgctl: 25h Grasp: E_CMD_FAILED\").\n"
+               "part, obstacle, fault, time, capture, drop and reset print "
+               "the\n"
+               "channel's answer without its \"ok\" (\"part 40 50\", "
+               "\"paused\"). Errors go to\n"
+               "stderr with the manual's names (\"wsgctl: 25h Grasp: "
+               "E_CMD_FAILED\").\n"
                "\nExit status: 0 E_SUCCESS; 1 the gripper answered another "
                "status (--text: an\n"
                "ERR line; decode: a bad checksum or incomplete packet; "
@@ -653,7 +659,8 @@ static int check_command(const struct ctx *x, const struct command *cmd,
         cmd->run != c_decode) {
         err("%s needs the gripper's interface: --control reads only (state, "
             "width, speed, force, temperature, stats) and sends the "
-            "channel's own commands (part, obstacle, fault, time, drop, "
+            "channel's own commands (part, obstacle, fault, time, capture, "
+            "drop, "
             "reset, script; wait-ready)",
             cmd->name);
         return EXIT_USAGE;

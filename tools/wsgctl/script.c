@@ -134,37 +134,45 @@ static int json_true(const char *json, const char *key)
 
 /* ---- the subcommands ---- */
 
-/* FILE as the daemon gets it: absolute, since the daemon resolves a
- * relative path from its own working directory, not from wsgctl's. */
+int wsgctl_path(const char *what, const char *file, char *path, size_t cap)
+{
+    for (const char *p = file; *p; p++)
+        if (isspace((unsigned char)*p)) {
+            /* The channel splits its lines at blanks. */
+            err("%s: a path with a blank cannot go through the "
+                "control channel: \"%s\"",
+                what, file);
+            return EXIT_USAGE;
+        }
+    if (file[0] == '/') {
+        if ((size_t)snprintf(path, cap, "%s", file) >= cap) {
+            err("%s: path too long: \"%s\"", what, file);
+            return EXIT_USAGE;
+        }
+    } else {
+        char cwd[SCRIPT_PATH_MAX];
+
+        if (!getcwd(cwd, sizeof cwd)) {
+            err("%s: the working directory: %s", what, strerror(errno));
+            return EXIT_USAGE;
+        }
+        if ((size_t)snprintf(path, cap, "%s/%s", cwd, file) >= cap) {
+            err("%s: path too long: \"%s\"", what, file);
+            return EXIT_USAGE;
+        }
+    }
+    return 0;
+}
+
 static int script_run(struct ctx *x, const char *file)
 {
     char path[SCRIPT_PATH_MAX], cmd[SCRIPT_PATH_MAX + 16];
     char line[SCRIPT_LINE_MAX];
     const char *rest;
+    int rc = wsgctl_path("script run", file, path, sizeof path);
 
-    for (const char *p = file; *p; p++)
-        if (isspace((unsigned char)*p)) {
-            /* The channel splits its lines at blanks. */
-            err("script run: a path with a blank cannot go through the "
-                "control channel: \"%s\"",
-                file);
-            return EXIT_USAGE;
-        }
-    if (file[0] == '/') {
-        snprintf(path, sizeof path, "%s", file);
-    } else {
-        char cwd[SCRIPT_PATH_MAX];
-
-        if (!getcwd(cwd, sizeof cwd)) {
-            err("script run: the working directory: %s", strerror(errno));
-            return EXIT_USAGE;
-        }
-        if ((size_t)snprintf(path, sizeof path, "%s/%s", cwd, file) >=
-            sizeof path) {
-            err("script run: path too long: \"%s\"", file);
-            return EXIT_USAGE;
-        }
-    }
+    if (rc)
+        return rc;
     snprintf(cmd, sizeof cmd, "script run %s", path);
     return control_line(x, cmd, line, sizeof line, &rest);
 }

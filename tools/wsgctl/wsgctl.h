@@ -199,5 +199,13 @@ void close_both_ways(struct conn *c);
 /* ---- scripts on the gripper, through the control channel (script.c) ---- */
 
 int c_script(struct ctx *x, int argc, char **argv);
+/* capture [start FILE | stop]: the control channel's capture, FILE made
+ * absolute (control.c). */
+int c_capture(struct ctx *x, int argc, char **argv);
+/* FILE as the daemon gets it: absolute, since the daemon resolves a
+ * relative path from its own working directory, not from wsgctl's. 0
+ * with it in path; EXIT_USAGE (said) for a blank in it or one too long.
+ * what names the command in the message. */
+int wsgctl_path(const char *what, const char *file, char *path, size_t cap);
 
 #endif
