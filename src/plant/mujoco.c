@@ -496,9 +496,14 @@ static int mj_object(const struct wsg_plant *pl, struct wsg_object *o)
 {
     const struct mj_plant *p = (const struct mj_plant *)pl;
 
+    int k;
+
     if (!p->has_obj)
         return 0;
     *o = p->obj;
+    for (k = 0; k < 3; k++)
+        o->pos[k] =
+            p->obj_body >= 0 ? p->d->xpos[3 * p->obj_body + k] * 1e3 : 0.0;
     return 1;
 }
 

@@ -185,7 +185,10 @@ static void test_shapes(const char *exe)
     CHECK_EQ(home_step(&c, &k, NULL), WSG_E_SUCCESS);
 
     CMD_OK(&k, "object box 40 20 30");
-    CHECK(strstr(ctl_cmd(&k, "object"), "box") != NULL);
+    /* The state names it for the page: shape, sizes, where it is. */
+    CHECK(strstr(ctl_cmd(&k, "state"),
+                 "\"object\":{\"kind\":\"box\",\"size\":[40,20,30],"
+                 "\"mass\":0.1,\"friction\":1,\"pos\":[0.00,0.00,") != NULL);
     CHECK_EQ(grasp_step(&c, &k, 40, 50, NULL), WSG_E_SUCCESS);
     held(&c, 40, "box");
     CHECK_EQ(release_step(&c, &k, 60, 50, NULL), WSG_E_SUCCESS);
@@ -203,7 +206,7 @@ static void test_shapes(const char *exe)
     /* Nothing between the fingers: the grasp closes through its
      * clamping travel and finds no part. */
     CMD_OK(&k, "object none");
-    CHECK(strstr(ctl_cmd(&k, "object"), "none") != NULL);
+    CHECK(strstr(ctl_cmd(&k, "state"), "\"object\":null") != NULL);
     CHECK_EQ(grasp_step(&c, &k, 40, 50, NULL), WSG_E_CMD_FAILED);
     CHECK_EQ(grasp_state(&c, NULL), WSG_GS_NO_PART);
 
@@ -220,6 +223,17 @@ static void test_shapes(const char *exe)
     stop(&e, &k, &c);
 }
 
+/* The object's z (mm) in a state answer; 1e9 when there is none. */
+static double ctl_json_z(const char *state)
+{
+    const char *p = strstr(state, "\"pos\":[");
+    double x, y, z;
+
+    if (!p || sscanf(p + 7, "%lf,%lf,%lf", &x, &y, &z) != 3)
+        return 1e9;
+    return z;
+}
+
 static void test_pull(const char *exe)
 {
     struct emu e;
@@ -227,6 +241,7 @@ static void test_pull(const char *exe)
     struct emu_client c;
     uint8_t p[64];
     size_t n;
+    double z0, z1;
 
     start(&e, &k, &c, exe, NULL);
     CHECK_EQ(home_step(&c, &k, NULL), WSG_E_SUCCESS);
@@ -239,9 +254,14 @@ static void test_pull(const char *exe)
     CHECK_EQ(grasp_state(&c, NULL), WSG_GS_HOLDING);
     CHECK(!ctl_is_ok(ctl_cmd(&k, "pull -1")));
     CHECK(!ctl_is_ok(ctl_cmd(&k, "pull nan")));
+    z0 = ctl_json_z(ctl_cmd(&k, "state"));
     CMD_OK(&k, "pull 200");
     CMD_OK(&k, "time step 2000");
     CHECK_EQ(grasp_state(&c, NULL), WSG_GS_PART_LOST);
+    /* Pulled out of the fingers: the state shows it far below. */
+    z1 = ctl_json_z(ctl_cmd(&k, "state"));
+    fprintf(stderr, "pull: the box's centre from z %.2f to %.2f mm\n", z0, z1);
+    CHECK(z0 > -100.0 && z1 < z0 - 50.0);
     /* 42h counts the part lost (total u32, no part u16, lost u16). */
     CHECK_EQ(one(&c, WSG_CMD_GET_GRASP_STATS, NULL, 0, p, &n, NULL),
              WSG_E_SUCCESS);
