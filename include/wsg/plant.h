@@ -61,6 +61,11 @@ enum wsg_object_kind {
     WSG_OBJECT_SPHERE    /* size: diameter */
 };
 
+/* The largest size of an object (mm): well beyond any stroke, small
+ * enough that it never reaches the model's floor (0.5 m below), whose
+ * contacts would make each step cost many times more. */
+#define WSG_OBJECT_SIZE_MAX 300.0
+
 struct wsg_object {
     enum wsg_object_kind kind;
     double size[3]; /* mm */

@@ -47,11 +47,11 @@
 #define WSG_CTL_OBJECT_ARGS_MAX 7
 /* "time step" at most one hour at once: the loop is blocked meanwhile. */
 #define WSG_CTL_STEP_MS_MAX 3600000.0
-/* With physics every step costs (some 2 us a step for one gripper in the
- * model's scene, every step run): at most ten minutes of it at once, over
- * all the grippers that have it, so that the loop stays blocked for about
- * a second at most. */
-#define WSG_CTL_STEP_MS_PHYSICS 600000.0
+/* With physics every step is run and costs: 2 us for one gripper in the
+ * model's scene, up to some 10 us with the largest object pressed into
+ * the pads. At most a minute of it at once, over all the grippers that
+ * have it, so that the loop stays blocked for under a second. */
+#define WSG_CTL_STEP_MS_PHYSICS 60000.0
 
 struct wsg_ctl;
 
@@ -204,8 +204,9 @@ static void cmd_object(struct ctl_ctx *c, int argc, char **argv)
     }
     for (i = 0; i < n; i++)
         if (!parse_num(argv[2 + i], &o.size[i]) || o.size[i] <= 0.0 ||
-            o.size[i] > 1000.0) {
-            reply(c, "error object: sizes must be numbers of mm in 0..1000");
+            o.size[i] > WSG_OBJECT_SIZE_MAX) {
+            reply(c, "error object: sizes must be numbers of mm in 0..%g",
+                  WSG_OBJECT_SIZE_MAX);
             return;
         }
     if ((argc > 2 + n && (!parse_num(argv[2 + n], &o.mass) || o.mass <= 0.0 ||

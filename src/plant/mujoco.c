@@ -472,7 +472,7 @@ static int mj_place(struct wsg_plant *pl, const struct wsg_object *o)
             : o->kind == WSG_OBJECT_CYLINDER ? 2
                                              : 1;
         for (i = 0; i < n; i++)
-            if (!(o->size[i] > 0.0 && o->size[i] <= 1000.0))
+            if (!(o->size[i] > 0.0 && o->size[i] <= WSG_OBJECT_SIZE_MAX))
                 return -ERANGE;
         if (!(o->mass > 0.0 && o->mass <= 100.0) ||
             !(o->friction >= 0.0 && o->friction <= 10.0))

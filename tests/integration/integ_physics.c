@@ -19,7 +19,8 @@
  *   reply bytes;
  * - fingers: --finger0 fmf --finger1 dsa read the contact: the FMF's force
  *   near 45h's, the DSA cells under the box's face set and adding up to
- *   the pad's force; both 0 with no object.
+ *   the pad's force; both 0 with no object;
+ * - wsgctl: its object and pull, through the control channel.
  *
  * Skips (77) in a build without MuJoCo.
  */
@@ -491,6 +492,55 @@ static void test_fingers(const char *exe)
     stop(&e, &k, &c);
 }
 
+/* wsgctl's object and pull: the channel's lines, its answers printed
+ * without "ok", a refusal exit 1, a usage error 2. $WSGCTL names it (ctest
+ * sets it). */
+static void test_wsgctl(const char *exe)
+{
+    const char *wsgctl = getenv("WSGCTL");
+    char addr[64], out[512], err[512];
+    const char *box[] = {"--control", addr, "object", "box", "40",
+                         "20",        "30", "0.2",    NULL};
+    const char *pull[] = {"--control", addr, "pull", "5", NULL};
+    const char *cone[] = {"--control", addr, "object", "cone", "3", NULL};
+    const char *big[] = {"--control", addr, "object", "sphere", "301", NULL};
+    const char *none[] = {"--control", addr, "object", "none", NULL};
+    struct emu e;
+    struct ctl k;
+    struct emu_client c;
+
+    if (!wsgctl) {
+        fprintf(stderr, "wsgctl: no $WSGCTL, not run\n");
+        return;
+    }
+    start(&e, &k, &c, exe, NULL);
+    REQUIRE(emu_field(&e, "control", addr, sizeof addr) != NULL);
+    CHECK_EQ(
+        emu_run(wsgctl, box, EMU_REPLY_MS, out, sizeof out, err, sizeof err),
+        0);
+    CHECK(strcmp(out, "object box 40 20 30 0.2 1\n") == 0);
+    CHECK(strstr(ctl_cmd(&k, "state"), "\"kind\":\"box\"") != NULL);
+    CHECK_EQ(
+        emu_run(wsgctl, pull, EMU_REPLY_MS, out, sizeof out, err, sizeof err),
+        0);
+    CHECK(strcmp(out, "pull 5\n") == 0);
+    /* The channel's usage error is wsgctl's (exit 2), a value it refuses
+     * a refusal (exit 1). */
+    CHECK_EQ(
+        emu_run(wsgctl, cone, EMU_REPLY_MS, out, sizeof out, err, sizeof err),
+        2);
+    CHECK(strstr(err, "usage: object") != NULL);
+    CHECK_EQ(
+        emu_run(wsgctl, big, EMU_REPLY_MS, out, sizeof out, err, sizeof err),
+        1);
+    CHECK(strstr(err, "sizes must be") != NULL);
+    CHECK_EQ(
+        emu_run(wsgctl, none, EMU_REPLY_MS, out, sizeof out, err, sizeof err),
+        0);
+    CHECK(strstr(ctl_cmd(&k, "state"), "\"object\":null") != NULL);
+    stop(&e, &k, &c);
+}
+
 int main(int argc, char **argv)
 {
     const char *exe = emu_exe(argc, argv);
@@ -514,6 +564,8 @@ int main(int argc, char **argv)
         test_determinism(exe);
     if (!strcmp(part, "all") || !strcmp(part, "fingers"))
         test_fingers(exe);
+    if (!strcmp(part, "all") || !strcmp(part, "wsgctl"))
+        test_wsgctl(exe);
     TEST_EXIT();
 #endif
 }
