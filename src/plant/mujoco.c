@@ -148,11 +148,31 @@ static int user_xml(const struct mj_plant *p, char *buf, size_t n,
     /* MuJoCo resolves the include beside the wrapper, which load_xml
      * names in the scene's folder. */
     const char *slash = strrchr(p->scene, '/');
-    int r = snprintf(buf, n,
-                     "<mujoco><include file=\"%s\"/><worldbody>%s</worldbody>"
-                     "</mujoco>",
-                     slash ? slash + 1 : p->scene, object);
+    const char *f = slash ? slash + 1 : p->scene;
+    char name[1024];
+    size_t k = 0;
+    int r;
 
+    /* The file's name as an XML attribute: what XML quotes, quoted. */
+    for (; *f; f++) {
+        const char *e = *f == '&'    ? "&amp;"
+                        : *f == '<'  ? "&lt;"
+                        : *f == '>'  ? "&gt;"
+                        : *f == '"'  ? "&quot;"
+                        : *f == '\'' ? "&apos;"
+                                     : NULL;
+        size_t len = e ? strlen(e) : 1;
+
+        if (k + len >= sizeof name)
+            return -ENAMETOOLONG;
+        memcpy(name + k, e ? e : f, len);
+        k += len;
+    }
+    name[k] = '\0';
+    r = snprintf(buf, n,
+                 "<mujoco><include file=\"%s\"/><worldbody>%s</worldbody>"
+                 "</mujoco>",
+                 name, object);
     return r >= (int)n ? -ENAMETOOLONG : 0;
 }
 

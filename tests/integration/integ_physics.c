@@ -359,7 +359,7 @@ static const char scene_xml[] =
 
 static void test_scene(const char *exe)
 {
-    char path[256], err[1024];
+    char path[256], odd[300], err[1024];
     const char *extra[] = {"--scene", path, "--scene-fingers", "jl,jr", NULL};
     const char *bad[] = {
         "--tcp", "127.0.0.1:0",     "--physics",          "mujoco", "--scene",
@@ -376,6 +376,16 @@ static void test_scene(const char *exe)
     CHECK_EQ(grasp_step(&c, &k, 50, 50, NULL), WSG_E_SUCCESS);
     held(&c, 50, "own scene");
     stop(&e, &k, &c);
+
+    /* A file name with what XML quotes in it loads as well. */
+    snprintf(odd, sizeof odd, "%s&<\"'>.xml", path);
+    REQUIRE(rename(path, odd) == 0);
+    extra[1] = odd;
+    start(&e, &k, &c, exe, extra);
+    CMD_OK(&k, "object sphere 30");
+    CHECK(strstr(ctl_cmd(&k, "state"), "\"kind\":\"sphere\"") != NULL);
+    stop(&e, &k, &c);
+    REQUIRE(rename(odd, path) == 0);
 
     /* The scene has no joints of those names: refused at start, as an
      * interface that cannot be opened is (status 1), naming the joint. */
