@@ -112,6 +112,21 @@ check_fleet() {
     check "fleet CPU all / CPU 2 moving" no
 }
 
+# The MuJoCo plant's rows, unless the bench says the emulator was built
+# without it (there are none then).
+check_physics() {
+    if grep -q 'built without MuJoCo' "$dir/bench.err"; then
+        return
+    fi
+    check "builtin holding: CPU % of one core" no
+    check "mujoco holding: CPU % of one core" no
+    check "mujoco holding: model steps/s" no
+    check "mujoco holding: step overruns" no
+    check "mujoco holding / builtin moving CPU" no
+    check "mujoco x100: cycle wall (ms)" no
+    check "mujoco x100: speed-up" no
+}
+
 check_measured() {
     if grep -q 'n/a' "$out"; then
         echo "FAIL: a figure was not measured (n/a) in the $1 run" >&2
@@ -120,15 +135,17 @@ check_measured() {
 }
 
 # 1. The bench starts the emulator.
-"$bench" --quick >"$out"
+"$bench" --quick >"$out" 2>"$dir/bench.err"
 rc=$?
 cat "$out"
+cat "$dir/bench.err" >&2
 if [ "$rc" -ne 0 ]; then
     echo "FAIL: wsgbench --quick exited with status $rc" >&2
     exit 1
 fi
 check_rows
 check_fleet
+check_physics
 check_measured started
 
 # 2. Attached to a running emulator. Its UDP answers go to this port,

@@ -44,7 +44,9 @@ if [ $# = 0 ]; then
         integ_script:lifecycle integ_script:sandbox integ_script:lockstep \
         integ_script:startup integ_script:dialect \
         integ_gcl:commands integ_gcl:framing integ_gcl:rules \
-        integ_gcl:fleet integ_gcl:log scenarios
+        integ_gcl:fleet integ_gcl:log \
+        integ_physics:shapes integ_physics:pull integ_physics:scene \
+        integ_physics:determinism integ_physics:fingers scenarios
 fi
 
 if ! command -v valgrind >/dev/null 2>&1; then

@@ -133,6 +133,47 @@ window.wsg = (function () {
     }
   }
 
+  /* A physics plant's object (--physics mujoco), in the same side view:
+   * x across the fingers from the middle, z up the scene, the fingers'
+   * tips up on the page as the scene's hang down, so the pads' middle
+   * (z = -23.8 mm in the model's scene) is the drawn fingers' middle. A
+   * box shows its width and height, a cylinder (its axis along the
+   * fingers) its diameter and length, a sphere a circle. */
+  function showObject(s) {
+    const el = $('object');
+    const row = $('objectrow');
+    const o = s.object;
+    if (!el || !row)
+      return;
+    row.hidden = o === undefined || o === null;
+    if (!o || !o.pos) {
+      el.setAttribute('visibility', 'hidden');
+      if (!o && $('objectinfo'))
+        $('objectinfo').textContent = 'none';
+      return;
+    }
+    const stroke = info ? info.stroke : 110;
+    const mid = 160, span = 236, bottom = 130;
+    const px = span / stroke;
+    const w = Math.max(1, o.size[0] * px);
+    const h = Math.max(1, (o.kind === 'box' ? o.size[2]
+      : o.kind === 'cylinder' ? o.size[1] : o.size[0]) * px);
+    const cx = mid + o.pos[0] * px, cy = bottom + o.pos[2] * px;
+    el.setAttribute('x', (cx - w / 2).toFixed(1));
+    el.setAttribute('y', (cy - h / 2).toFixed(1));
+    el.setAttribute('width', w.toFixed(1));
+    el.setAttribute('height', h.toFixed(1));
+    el.setAttribute('rx', o.kind === 'sphere' ? (w / 2).toFixed(1) : '0');
+    el.dataset.kind = o.kind;
+    /* Out of the view (fallen away): not drawn. */
+    el.setAttribute('visibility', cy + h / 2 < 0 || cy - h / 2 > 170
+      ? 'hidden' : 'visible');
+    el.classList.toggle('held', s.grasp_state_name === 'holding');
+    $('objectinfo').textContent = o.kind + ' ' +
+      o.size.slice(0, o.kind === 'box' ? 3 : o.kind === 'cylinder' ? 2 : 1)
+        .join(' × ') + ' mm, ' + o.mass + ' kg';
+  }
+
   function showReadings(s) {
     $('width').textContent = fixed(s.width, 1);
     $('speed').textContent = fixed(s.speed, 1);
@@ -207,6 +248,7 @@ window.wsg = (function () {
     last = s;
     wsg.state = s;
     showGripper(s);
+    showObject(s);
     showReadings(s);
     if (info)
       showFlags(s);

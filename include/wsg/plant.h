@@ -61,11 +61,20 @@ enum wsg_object_kind {
     WSG_OBJECT_SPHERE    /* size: diameter */
 };
 
+/* The largest size of an object (mm): well beyond any stroke, small
+ * enough that it never reaches the model's floor (0.5 m below), whose
+ * contacts would make each step cost many times more. */
+#define WSG_OBJECT_SIZE_MAX 300.0
+
 struct wsg_object {
     enum wsg_object_kind kind;
     double size[3]; /* mm */
     double mass;    /* kg */
     double friction;
+    /* Where its centre is now (object fills it in; place ignores it): mm
+     * in the scene's frame; the model's scene has its base at 0, x across
+     * the fingers, z up. */
+    double pos[3];
 };
 
 struct wsg_plant;
@@ -82,7 +91,7 @@ struct wsg_plant_ops {
                     int finger, struct wsg_contact *c);
     /* Place an object (kind NONE removes it): 0 or -errno (-ENOTSUP). */
     int (*place)(struct wsg_plant *p, const struct wsg_object *o);
-    /* The object placed: 1 with *o, or 0. */
+    /* The object placed: 1 with *o (its position now), or 0. */
     int (*object)(const struct wsg_plant *p, struct wsg_object *o);
     /* Pull on the object out of the fingers with n newtons (0: none). */
     int (*pull)(struct wsg_plant *p, double n);

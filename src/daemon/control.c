@@ -48,6 +48,11 @@
 #define WSG_CTL_OBJECT_ARGS_MAX 7
 /* "time step" at most one hour at once: the loop is blocked meanwhile. */
 #define WSG_CTL_STEP_MS_MAX 3600000.0
+/* With physics every step is run and costs: 2 us for one gripper in the
+ * model's scene, up to some 10 us with the largest object pressed into
+ * the pads. At most a minute of it at once, over all the grippers that
+ * have it, so that the loop stays blocked for under a second. */
+#define WSG_CTL_STEP_MS_PHYSICS 60000.0
 
 struct wsg_ctl;
 
@@ -204,8 +209,9 @@ static void cmd_object(struct ctl_ctx *c, int argc, char **argv)
     }
     for (i = 0; i < n; i++)
         if (!parse_num(argv[2 + i], &o.size[i]) || o.size[i] <= 0.0 ||
-            o.size[i] > 1000.0) {
-            reply(c, "error object: sizes must be numbers of mm in 0..1000");
+            o.size[i] > WSG_OBJECT_SIZE_MAX) {
+            reply(c, "error object: sizes must be numbers of mm in 0..%g",
+                  WSG_OBJECT_SIZE_MAX);
             return;
         }
     if ((argc > 2 + n && (!parse_num(argv[2 + n], &o.mass) || o.mass <= 0.0 ||
@@ -222,6 +228,13 @@ static void cmd_object(struct ctl_ctx *c, int argc, char **argv)
               "error object: the %s plant has no objects (--physics "
               "mujoco has; here: part)",
               p->ops->name);
+        return;
+    }
+    if (r == -EINVAL) {
+        /* MuJoCo's compiler refused the body: its inertia is below what
+         * it takes (a tiny, light object). */
+        reply(c, "error object: the physics refuses it (too small or too "
+                 "light to simulate)");
         return;
     }
     if (r < 0) {
@@ -392,13 +405,18 @@ static void cmd_time(struct ctl_ctx *c, int argc, char **argv)
         return;
     }
     if (strcmp(argv[1], "step") == 0 && argc == 3) {
-        double us;
+        double us, max = WSG_CTL_STEP_MS_MAX;
+        size_t i, physics = 0;
 
-        if (!parse_num(argv[2], &v) || v <= 0.0 || v > WSG_CTL_STEP_MS_MAX) {
+        for (i = 0; i < l->ngrippers; i++)
+            physics += l->grippers[i].plant != NULL;
+        if (physics)
+            max = floor(WSG_CTL_STEP_MS_PHYSICS / (double)physics);
+        if (!parse_num(argv[2], &v) || v <= 0.0 || v > max) {
             reply(c,
                   "error time step: MS must be a number of ms in "
-                  "(0, %.0f]",
-                  WSG_CTL_STEP_MS_MAX);
+                  "(0, %.0f]%s",
+                  max, physics ? " with physics" : "");
             return;
         }
         /* Exactly the time asked for, or nothing: a lockstep test must

@@ -6,11 +6,13 @@
  */
 #include "state.h"
 
+#include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <string.h>
 
 #include "script.h"
+#include "wsg/plant.h"
 #include "wsg/schema.h"
 
 /* The script's name and error are cut to these many bytes of JSON: the
@@ -122,6 +124,33 @@ static void append_fingers(char *buf, size_t cap, size_t *used,
     append(buf, cap, used, "],");
 }
 
+/* The object a physics plant holds between the fingers, for the page to
+ * draw: its shape, sizes (mm), mass, friction and where it is now (mm, the
+ * scene's frame); null when there is none or the plant has no objects. A
+ * position that is not a number (a scene gone unstable) reads null. */
+static void append_object(char *buf, size_t cap, size_t *used,
+                          const struct wsg_gripper *g)
+{
+    static const char *const kinds[] = {"none", "box", "cylinder", "sphere"};
+    struct wsg_object o;
+
+    if (!g->plant || !g->plant->ops->object(g->plant, &o) ||
+        (unsigned)o.kind >= sizeof kinds / sizeof kinds[0]) {
+        append(buf, cap, used, "\"object\":null,");
+        return;
+    }
+    append(buf, cap, used,
+           "\"object\":{\"kind\":\"%s\",\"size\":[%g,%g,%g],\"mass\":%g,"
+           "\"friction\":%g,\"pos\":",
+           kinds[o.kind], o.size[0], o.size[1], o.size[2], o.mass, o.friction);
+    if (isfinite(o.pos[0]) && isfinite(o.pos[1]) && isfinite(o.pos[2]) &&
+        fabs(o.pos[0]) < 1e6 && fabs(o.pos[1]) < 1e6 && fabs(o.pos[2]) < 1e6)
+        append(buf, cap, used, "[%.2f,%.2f,%.2f]},", o.pos[0], o.pos[1],
+               o.pos[2]);
+    else
+        append(buf, cap, used, "null},");
+}
+
 void wsg_state_format_time(char *buf, size_t len, uint64_t us)
 {
     char frac[8];
@@ -185,6 +214,7 @@ size_t wsg_state_format(char *buf, size_t cap, const struct wsg_gripper *g,
         (unsigned long long)wsg_gripper_delay_dropped(g));
     append_script(buf, cap, &used, g);
     append_fingers(buf, cap, &used, d);
+    append_object(buf, cap, &used, g);
     /* The world's part and obstacle too: the web page draws them
      * between the fingers. */
     if (wsg_axis_part(ax, &part_width, &stiffness))

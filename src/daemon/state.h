@@ -35,7 +35,8 @@ void wsg_state_format_time(char *buf, size_t len, uint64_t us);
  * flags and their names, grasp state and its name, statistics, simulated
  * time, whether time is paused and its scale, the delay line's figures,
  * the script host's script (its name, whether it runs, its error), the
- * fingers (kind, power, fault, the force on each pad), the
+ * fingers (kind, power, fault, the force on each pad), the object of a
+ * physics plant (shape, sizes, mass, friction, position; null: none), the
  * part placed between the fingers and the obstacle (null: none). Returns the
  * length. */
 size_t wsg_state_format(char *buf, size_t cap, const struct wsg_gripper *g,

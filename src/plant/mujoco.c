@@ -148,11 +148,31 @@ static int user_xml(const struct mj_plant *p, char *buf, size_t n,
     /* MuJoCo resolves the include beside the wrapper, which load_xml
      * names in the scene's folder. */
     const char *slash = strrchr(p->scene, '/');
-    int r = snprintf(buf, n,
-                     "<mujoco><include file=\"%s\"/><worldbody>%s</worldbody>"
-                     "</mujoco>",
-                     slash ? slash + 1 : p->scene, object);
+    const char *f = slash ? slash + 1 : p->scene;
+    char name[1024];
+    size_t k = 0;
+    int r;
 
+    /* The file's name as an XML attribute: what XML quotes, quoted. */
+    for (; *f; f++) {
+        const char *e = *f == '&'    ? "&amp;"
+                        : *f == '<'  ? "&lt;"
+                        : *f == '>'  ? "&gt;"
+                        : *f == '"'  ? "&quot;"
+                        : *f == '\'' ? "&apos;"
+                                     : NULL;
+        size_t len = e ? strlen(e) : 1;
+
+        if (k + len >= sizeof name)
+            return -ENAMETOOLONG;
+        memcpy(name + k, e ? e : f, len);
+        k += len;
+    }
+    name[k] = '\0';
+    r = snprintf(buf, n,
+                 "<mujoco><include file=\"%s\"/><worldbody>%s</worldbody>"
+                 "</mujoco>",
+                 name, object);
     return r >= (int)n ? -ENAMETOOLONG : 0;
 }
 
@@ -472,7 +492,7 @@ static int mj_place(struct wsg_plant *pl, const struct wsg_object *o)
             : o->kind == WSG_OBJECT_CYLINDER ? 2
                                              : 1;
         for (i = 0; i < n; i++)
-            if (!(o->size[i] > 0.0 && o->size[i] <= 1000.0))
+            if (!(o->size[i] > 0.0 && o->size[i] <= WSG_OBJECT_SIZE_MAX))
                 return -ERANGE;
         if (!(o->mass > 0.0 && o->mass <= 100.0) ||
             !(o->friction >= 0.0 && o->friction <= 10.0))
@@ -496,9 +516,14 @@ static int mj_object(const struct wsg_plant *pl, struct wsg_object *o)
 {
     const struct mj_plant *p = (const struct mj_plant *)pl;
 
+    int k;
+
     if (!p->has_obj)
         return 0;
     *o = p->obj;
+    for (k = 0; k < 3; k++)
+        o->pos[k] =
+            p->obj_body >= 0 ? p->d->xpos[3 * p->obj_body + k] * 1e3 : 0.0;
     return 1;
 }
 

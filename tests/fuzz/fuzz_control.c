@@ -5,14 +5,20 @@
  * is "ok" or "ok ..." or "error ...", one line, no longer than the
  * channel's limit; a JSON answer (state, stats) has balanced braces and
  * quotes; and the models stay within their stroke whatever the world
- * commands did to them.
+ * commands did to them. Gripper 1 moves in the MuJoCo plant where the
+ * build has it, so that after `gripper 1` the world's commands (object,
+ * pull) and time reach the physics; only in inputs that select it, since
+ * loading a scene costs more than the rest of a run.
  */
+#define _GNU_SOURCE /* memmem */
+
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "ctlbench.h"
+#include "wsg/plant.h"
 
 #ifndef FUZZ_ENTRY
 #define FUZZ_ENTRY LLVMFuzzerTestOneInput
@@ -66,6 +72,39 @@ static void fuzz_answer(void *ctx, const char *line, size_t len)
         fuzz_fail("unbalanced JSON", line, len);
 }
 
+/* A "time step" with physics may cost up to a second (the channel's
+ * bound): inputs with more of them run without physics, so that libFuzzer's
+ * timeout flags hangs, not physics. */
+#define FUZZ_PHYSICS_STEPS 4
+
+static size_t steps_in(const uint8_t *data, size_t size)
+{
+    const uint8_t *p = data, *end = data + size, *q;
+    size_t n = 0;
+
+    while (p < end && (q = memmem(p, (size_t)(end - p), "step", 4))) {
+        n++;
+        p = q + 4;
+    }
+    return n;
+}
+
+/* Gripper 1 on the MuJoCo plant's own scene (a no-op without it). */
+static void fuzz_physics(struct ctlbench *b)
+{
+    struct wsg_gripper *g = &b->grippers[1];
+    struct wsg_axis *ax = wsg_device_axis(&g->dev);
+    char err[256];
+
+    if (!wsg_plant_mujoco_available() ||
+        wsg_plant_mujoco_open(&g->plant, wsg_axis_cfg(ax), NULL, NULL, NULL,
+                              err, sizeof err) < 0) {
+        g->plant = NULL;
+        return;
+    }
+    wsg_axis_set_plant(ax, g->plant);
+}
+
 int FUZZ_ENTRY(const uint8_t *data, size_t size)
 {
     static struct ctlbench b;
@@ -75,6 +114,9 @@ int FUZZ_ENTRY(const uint8_t *data, size_t size)
         ctlbench_close(&b);
         return 0;
     }
+    if (size >= 9 && memmem(data, size, "gripper 1", 9) &&
+        steps_in(data, size) <= FUZZ_PHYSICS_STEPS)
+        fuzz_physics(&b);
     wsg_control_session_init(&b.s, fuzz_answer, &b);
     /* Paused first: a run's outcome must not depend on the wall clock,
      * and a model set moving is stepped only by the input's "time step". */

@@ -6,7 +6,8 @@
 #      render without warnings (where man is installed); the installed
 #      wsgemu serves and the installed wsgctl talks to it; the installed
 #      config file starts it, and so does a copy with every example setting
-#      of it uncommented (but `can`, which needs a SocketCAN interface),
+#      of it uncommented (but `can`, which needs a SocketCAN interface,
+#      and the MuJoCo scene's two, which the example's builtin refuses),
 #      whose values the gripper then shows; a bad line in it is refused;
 #      logrotate's snippet (run by logrotate, where installed, on a
 #      scratch copy of /var/log) rotates wsgemu.service's log and every
@@ -295,9 +296,12 @@ stop_emu conf
 # but the CAN interface; the file system's and the network's are
 # overridden on the command line, and so is the pty's group (dialout
 # needs root or a user in it). The values must show in the gripper.
-check "the example config with every setting uncommented (but can) starts"
+check "the example config with every setting uncommented (but can, scene) starts"
 # The example startup script is where the package puts it, here under P.
+# scene and scene-fingers go with physics = mujoco and a scene file of the
+# user's: the example's physics is builtin, which refuses them.
 sed -e 's/^#\([a-z-]* = \)/\1/' -e '/^can = /d' \
+    -e '/^scene = /d' -e '/^scene-fingers = /d' \
     -e "s|^script = /usr/|script = $P/|" \
     "$P/$DOC/examples/wsgemu.conf" >"$S/all.conf"
 n=$(grep -c '^[a-z-]* = ' "$S/all.conf") || true

@@ -33,7 +33,7 @@
 #define STROKE_MM   110.0 /* WSG 50 */
 #define NS_PER_S    1000000000ull
 #define NS_PER_MS   1000000ull
-#define ROWS_MAX    64
+#define ROWS_MAX    96
 #define NOT_APPLIED (-INFINITY) /* a row's reference: not applicable */
 #define EMU         0
 #define REF         1
@@ -204,6 +204,10 @@ void put_move(uint8_t *pl, double width, double speed);
 double slow_speed(double window_s);
 int bench_moving(struct bench *b);
 int bench_timescale(struct bench *b);
+
+/* ---- the MuJoCo plant (physics.c) ---- */
+
+int bench_physics(struct bench *b);
 
 /* ---- the fleet (fleet.c) ---- */
 

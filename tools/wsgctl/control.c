@@ -4,8 +4,8 @@
  * moves the gripper without disturbing it (no 07h, no session): the
  * channel's "state" line is put into the reply layout the gripper would
  * have sent, and printed as that. And the channel's scenario commands
- * (part, obstacle, fault, time, drop, reset), sent as the line they are
- * and answered with what the channel answers; control_line is the one
+ * (part, obstacle, object, pull, fault, time, drop, reset), sent as the line
+ * they are and answered with what the channel answers; control_line is the one
  * exchange of a line they and the scripts (script.c) share.
  */
 #define _GNU_SOURCE /* getaddrinfo, sigaction, localtime_r */
@@ -121,8 +121,8 @@ int control_line(struct ctx *x, const char *cmd, char *line, size_t cap,
     return EXIT_CONN;
 }
 
-/* part, obstacle, fault, time, drop, reset: the command line as given
- * (the name and its arguments, checked by the channel, which knows the
+/* part, obstacle, object, pull, fault, time, drop, reset: the command line as
+ * given (the name and its arguments, checked by the channel, which knows the
  * gripper's range), and the answer without its "ok" ("part 40 50",
  * "paused", "dropped 1"); with --json under "answer". */
 int c_channel(struct ctx *x, int argc, char **argv)

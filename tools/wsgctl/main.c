@@ -198,6 +198,15 @@ static const struct command commands[] = {
      "control channel: something rigid that blocks the fingers at WIDTH mm, "
      "or none",
      "wsgctl --control 127.0.0.1:2000 obstacle 30", VIA_CONTROL},
+    {"object", c_channel, 1, 6, 1,
+     "box W D H | cylinder D L | sphere D [MASS [FRICTION]] | none",
+     "control channel, --physics mujoco: an object between the fingers "
+     "(sizes in mm, mass in kg, friction), or none",
+     "wsgctl --control 127.0.0.1:2000 object box 40 20 30 0.2", VIA_CONTROL},
+    {"pull", c_channel, 1, 1, 1, "N",
+     "control channel, --physics mujoco: pull the object out of the "
+     "fingers with N newtons (0: stop)",
+     "wsgctl --control 127.0.0.1:2000 pull 20", VIA_CONTROL},
     {"fault", c_channel, 2, 2, 1, "NAME on|off",
      "control channel: temp-warning, temp-fault, power, current or finger, "
      "the flag and its consequence",
@@ -347,11 +356,11 @@ static void usage(FILE *f)
                "values (-q: the\n"
                "channel's JSON line), script output the script's text as "
                "it printed it.\n"
-               "part, obstacle, fault, time, capture, drop and reset print "
-               "the\n"
-               "channel's answer without its \"ok\" (\"part 40 50\", "
-               "\"paused\"). Errors go to\n"
-               "stderr with the manual's names (\"wsgctl: 25h Grasp: "
+               "part, obstacle, object, pull, fault, time, capture, drop "
+               "and reset print\n"
+               "the channel's answer without its \"ok\" (\"part 40 50\", "
+               "\"paused\"). Errors go\n"
+               "to stderr with the manual's names (\"wsgctl: 25h Grasp: "
                "E_CMD_FAILED\").\n"
                "\nExit status: 0 E_SUCCESS; 1 the gripper answered another "
                "status (--text: an\n"
@@ -659,7 +668,8 @@ static int check_command(const struct ctx *x, const struct command *cmd,
         cmd->run != c_decode) {
         err("%s needs the gripper's interface: --control reads only (state, "
             "width, speed, force, temperature, stats) and sends the "
-            "channel's own commands (part, obstacle, fault, time, capture, "
+            "channel's own commands (part, obstacle, object, pull, fault, "
+            "time, capture, "
             "drop, "
             "reset, script; wait-ready)",
             cmd->name);
