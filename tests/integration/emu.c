@@ -489,7 +489,8 @@ int emu_run(const char *exe, const char *const *args, int timeout_ms,
             }
             size_t room = caps[i] > lens[i] + 1 ? caps[i] - lens[i] - 1 : 0;
             size_t take = (size_t)got < room ? (size_t)got : room;
-            memcpy(bufs[i] + lens[i], tmp, take);
+            if (take) /* a stream not kept has no buffer (NULL) */
+                memcpy(bufs[i] + lens[i], tmp, take);
             lens[i] += take;
         }
     }
