@@ -720,13 +720,13 @@ class Gripper:
     def finger_info(self, finger: int) -> Tuple[int, int]:
         """Get Finger Info (60h/70h): (type, size of its data)."""
         p = self.command(self._finger_cmd(finger, Cmd.GET_FINGER1_INFO))
-        return p[0], struct.unpack_from("<H", p, 1)[0]
+        return p[0], int(struct.unpack_from("<H", p, 1)[0])
 
     def finger_flags(self, finger: int) -> int:
         """Get Finger Flags (61h/71h): D0 powered, D1 data, D2 fault, D3
         contact, D4 UART, D5 SPI, D6 overrun."""
         p = self.command(self._finger_cmd(finger, Cmd.GET_FINGER1_FLAGS))
-        return struct.unpack_from("<H", p)[0]
+        return int(struct.unpack_from("<H", p)[0])
 
     def finger_power(self, finger: int, on: bool) -> None:
         """Finger Power Control (62h/72h)."""
