@@ -37,7 +37,8 @@ if [ $# = 0 ]; then
         integ_disconnect:tcp integ_disconnect:udp integ_disconnect:pty \
         integ_streams:tcp integ_streams:udp integ_streams:pty \
         integ_udp integ_pty integ_control integ_settings integ_log \
-        integ_latency integ_together integ_wsgctl integ_fleet integ_web \
+        integ_latency integ_together integ_wsgctl integ_fleet integ_fingers \
+        integ_web \
         integ_webforms integ_webscripts integ_webevents integ_webhost \
         integ_webhostile \
         integ_script:api integ_script:ifaces integ_script:speed \

@@ -385,3 +385,31 @@ def test_udp_client(wsgemu_binary):
         g.home()
         assert g.width() == pytest.approx(STROKE, abs=0.01)
         assert emu.gripper.system_state() & SystemFlag.SF_REFERENCED
+
+
+# ---- the fingers (docs/fingers.md) ----
+
+@pytest.mark.wsgemu_fingers("dsa", "fmf")
+def test_finger_helpers_follow_a_grasp(wsgemu):
+    g, c = wsgemu.gripper, wsgemu.control
+    assert g.finger_info(0) == (3, 168) and g.finger_info(1) == (2, 4)
+    assert g.finger_flags(0) & 0x3 == 0x3  # powered, data
+    g.home()
+    c.part(40.0)
+    g.set_force_limit(20.0)
+    g.grasp(40.0, 50.0)
+    cells = g.finger_cells(0)
+    assert len(cells) == 84 and max(cells) > 0
+    assert cells == c.finger_cells(0)
+    # The FMF finger reads the force held, as the channel says.
+    assert g.finger_force(1) == pytest.approx(
+        c.fingers()[1]["force"], abs=1e-3)
+    assert g.finger_force(1) > 0
+    g.finger_power(1, False)
+    with pytest.raises(WsgError) as e:
+        g.finger_data(1)
+    assert e.value.status_name == "E_NOT_AVAILABLE"
+    c.finger(1, "none")
+    assert g.finger_info(1) == (0, 0)
+    with pytest.raises(ValueError):
+        g.finger_info(2)

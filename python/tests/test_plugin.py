@@ -383,3 +383,23 @@ def test_find_binary_order(monkeypatch, tmp_path, wsgemu_binary):
     assert daemon.find_binary() == str(bundled / "wsgemu")  # then bundled
     monkeypatch.setattr(daemon, "BUNDLED_DIR", str(tmp_path / "none"))
     assert daemon.find_binary() == str(on_path / "wsgemu")  # then PATH
+
+
+def test_fixture_fits_fingers(pytester, wsgemu_binary):
+    pytester.makepyfile(test_user="""
+        import pytest
+
+        @pytest.mark.wsgemu_fingers("dsa", "fmf")
+        def test_marker(wsgemu):
+            g = wsgemu.gripper
+            assert g.finger_info(0) == (3, 168)
+            assert g.finger_info(1) == (2, 4)
+            assert g.finger_cells(0) == [0] * 84
+            assert g.finger_force(1) == 0.0
+
+        def test_option(wsgemu):
+            assert wsgemu.gripper.finger_info(0) == (0, 0)
+            assert wsgemu.control.fingers()[1]["kind"] == "generic"
+    """)
+    result = _run(pytester, wsgemu_binary, "--wsgemu-fingers", "none")
+    result.assert_outcomes(passed=2)

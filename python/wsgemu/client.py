@@ -707,6 +707,45 @@ class Gripper:
         measurement fingers."""
         self.command(Cmd.TARE)
 
+    # ---- the fingers (later firmware's 60h..63h, 70h..73h) ----
+    # Finger 0 is the commands' finger 1 (60h..63h), finger 1 their
+    # finger 2 (70h..73h); the 4.x style, no index byte (docs/fingers.md).
+
+    @staticmethod
+    def _finger_cmd(finger: int, first: int) -> int:
+        if finger not in (0, 1):
+            raise ValueError("a finger is 0 or 1")
+        return first + 0x10 * finger
+
+    def finger_info(self, finger: int) -> Tuple[int, int]:
+        """Get Finger Info (60h/70h): (type, size of its data)."""
+        p = self.command(self._finger_cmd(finger, Cmd.GET_FINGER1_INFO))
+        return p[0], int(struct.unpack_from("<H", p, 1)[0])
+
+    def finger_flags(self, finger: int) -> int:
+        """Get Finger Flags (61h/71h): D0 powered, D1 data, D2 fault, D3
+        contact, D4 UART, D5 SPI, D6 overrun."""
+        p = self.command(self._finger_cmd(finger, Cmd.GET_FINGER1_FLAGS))
+        return int(struct.unpack_from("<H", p)[0])
+
+    def finger_power(self, finger: int, on: bool) -> None:
+        """Finger Power Control (62h/72h)."""
+        self.command(self._finger_cmd(finger, Cmd.FINGER1_POWER),
+                     bytes([1 if on else 0]))
+
+    def finger_data(self, finger: int) -> bytes:
+        """Get Finger Data (63h/73h): as many bytes as 60h's size."""
+        return self.command(self._finger_cmd(finger, Cmd.GET_FINGER1_DATA))
+
+    def finger_force(self, finger: int) -> float:
+        """A force measurement finger's 63h: its force in N (tared)."""
+        return float(struct.unpack("<f", self.finger_data(finger))[0])
+
+    def finger_cells(self, finger: int) -> List[int]:
+        """A DSA pad's 63h: 84 cells, 6 columns by 14 rows, row-major."""
+        p = self.finger_data(finger)
+        return list(struct.unpack("<%dH" % (len(p) // 2), p))
+
     # ---- state (chapter 3.4) and system (3.5) ----
 
     def system_state(self) -> SystemFlag:
@@ -870,6 +909,23 @@ class Control:
         if stiffness is None:
             return self.command("part " + _num(width))
         return self.command("part %s %s" % (_num(width), _num(stiffness)))
+
+    def fingers(self) -> List[Dict[str, Any]]:
+        """Both fingers as the channel's `finger` has them (kind, type,
+        size, flags, powered, force, model)."""
+        return list(json.loads(self.command("finger")))
+
+    def finger(self, finger: int, kind: str) -> str:
+        """Fit finger 0 or 1: none, generic, fmf, dsa, or device:FILE (a
+        device model)."""
+        if kind.startswith("device:"):
+            return self.command("finger %d device %s" % (finger, kind[7:]))
+        return self.command("finger %d %s" % (finger, kind))
+
+    def finger_cells(self, finger: int) -> List[int]:
+        """A DSA pad's frame as the channel reads it (zeros otherwise)."""
+        return [int(x) for x in json.loads(
+            self.command("finger %d cells" % finger))]
 
     def obstacle(self, width: Optional[float]) -> str:
         """Something rigid that blocks the fingers at width mm; None

@@ -43,8 +43,12 @@ containers show theirs. It also captures every interface's traffic
 (``--capture``); a failing test's capture is kept, as
 ``DIR/<test>.pcapng`` with DIR from ``--wsgemu-captures=DIR`` (else
 ``wsgemu-captures`` in the system's temporary directory), and its report
-names the file, which Wireshark opens (the dissector wsg.lua decodes it). ``@pytest.mark.wsgemu_udp`` adds UDP on a free
-port answering to another free port.
+names the file, which Wireshark opens (the dissector wsg.lua decodes it).
+``@pytest.mark.wsgemu_udp`` adds UDP on a free port answering to another
+free port. ``@pytest.mark.wsgemu_fingers("dsa", "fmf")`` (or
+``--wsgemu-fingers dsa,fmf`` for every test) fits the fingers
+(``--finger0``, ``--finger1``; an attached daemon through its control
+channel).
 
 ``wsgemu_session``: one daemon for the whole session (ini arguments and
 ``--wsgemu-script`` only; the markers are per test and do not apply).
@@ -102,6 +106,12 @@ def pytest_addoption(parser: pytest.Parser) -> None:
                     help="where a failing test's capture of the daemon's "
                          "traffic (pcapng) is kept (default: "
                          "wsgemu-captures in the temporary directory)")
+    group.addoption("--wsgemu-fingers", dest="wsgemu_fingers",
+                    metavar="KIND0[,KIND1]", default=None,
+                    help="the fingers every wsgemu daemon is fitted with "
+                         "(none, generic, fmf, dsa, device:FILE; "
+                         "docs/fingers.md); the wsgemu_fingers marker "
+                         "overrides it")
     parser.addini("wsgemu_args", type="args", default=[],
                   help="extra arguments for every daemon the wsgemu "
                        "fixture starts")
@@ -129,6 +139,11 @@ def pytest_configure(config: pytest.Config) -> None:
         "None: none")
     config.addinivalue_line(
         "markers",
+        "wsgemu_fingers(kind0, kind1=None): the fingers this test's wsgemu "
+        "daemon is fitted with (--finger0, --finger1), e.g. "
+        "wsgemu_fingers('dsa', 'fmf')")
+    config.addinivalue_line(
+        "markers",
         "wsgemu_udp: this test's wsgemu daemon serves UDP too, on a free "
         "port, answering to a free port (new_udp_gripper())")
 
@@ -147,7 +162,25 @@ def daemon_args(node: pytest.Item) -> List[str]:
         # Each marker argument is one daemon argument, as given: a tag
         # "cell 5" stays one.
         args.extend(str(a) for a in marker.args)
+    for i, kind in enumerate(daemon_fingers(node)):
+        if kind:
+            args += ["--finger%d" % i, kind]
     return args
+
+
+def daemon_fingers(node: pytest.Item) -> List[str]:
+    """The kinds of node's daemon's fingers ("" for the default): the
+    nearest wsgemu_fingers marker's, else --wsgemu-fingers."""
+    marker = node.get_closest_marker("wsgemu_fingers")
+    if marker is not None:
+        kinds = [str(k) if k else "" for k in marker.args]
+    else:
+        opt = node.config.getoption("wsgemu_fingers")
+        kinds = opt.split(",") if opt else []
+    if len(kinds) > 2 or (marker is not None and marker.kwargs):
+        raise DaemonError("wsgemu_fingers takes one or two kinds, not %r"
+                          % (kinds,))
+    return [k.strip() for k in kinds]
 
 
 def daemon_script(node: pytest.Item) -> Optional[str]:
@@ -234,6 +267,9 @@ def wsgemu(request: pytest.FixtureRequest
         if emu.control_addr is not None:
             # What a fresh daemon would be: the last test's state gone.
             emu.control.reset()
+            for i, kind in enumerate(daemon_fingers(node)):
+                if kind:
+                    emu.control.finger(i, kind)
     else:
         emu = _start(request.config, daemon_args(node), daemon_script(node),
                      node.get_closest_marker("wsgemu_udp") is not None)

@@ -99,8 +99,9 @@ static void append_script(char *buf, size_t cap, size_t *used,
 }
 
 /* Each finger: its kind, power, fault, and what its pad feels (N). The
- * DSA cells are the control channel's `finger I cells` and the page's
- * /fingers: 84 numbers a finger would crowd this line. */
+ * DSA cells are the control channel's `finger I cells`, which the page
+ * asks for when this state changes: 84 numbers a finger would crowd this
+ * line. */
 static void append_fingers(char *buf, size_t cap, size_t *used,
                            const struct wsg_device *d)
 {

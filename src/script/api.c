@@ -203,8 +203,9 @@ static int api_etob(lua_State *L)
  * that loops could never be preempted and would hold the daemon (at a
  * collection, or in lua_close when the script is stopped). The __gc
  * field stays in the metatable; the table only is not marked, because
- * the field is absent at the moment the metatable is set. */
-static int api_setmetatable(lua_State *L)
+ * the field is absent at the moment the metatable is set. Device models
+ * (fdev.c) use it too. */
+int wsg_script_setmetatable(lua_State *L)
 {
     int t = lua_type(L, 2), gc;
 
@@ -772,7 +773,7 @@ void wsg_script_open_api(lua_State *L, struct wsg_script *h)
     lua_pop(L, 2);
 
     lua_register(L, "print", api_print);
-    lua_register(L, "setmetatable", api_setmetatable);
+    lua_register(L, "setmetatable", wsg_script_setmetatable);
     lua_register(L, "sleep", api_sleep);
     lua_register(L, "bton", api_bton);
     lua_register(L, "ntob", api_ntob);

@@ -24,6 +24,7 @@
 #include <lauxlib.h>
 #include <lua.h>
 #include <lualib.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -75,14 +76,137 @@ static struct wsg_fdev *fdev_of(lua_State *L)
     return m;
 }
 
+static void fdev_hook(lua_State *L, lua_Debug *ar);
+
+/* The call's bound used up: from now on every instruction raises the
+ * error again, so a model that catches it with pcall (in a loop, or
+ * before returning) still ends, in that error. */
+static void fdev_spent(lua_State *L)
+{
+    lua_sethook(L, fdev_hook, LUA_MASKCOUNT, 1);
+    luaL_error(L, "ran over its %u instructions", WSG_FDEV_INSTRUCTIONS);
+}
+
 static void fdev_hook(lua_State *L, lua_Debug *ar)
 {
     struct wsg_fdev *m = fdev_of(L);
 
     (void)ar;
     if (m->ticks == 0)
-        luaL_error(L, "ran over its %u instructions", WSG_FDEV_INSTRUCTIONS);
+        fdev_spent(L);
     m->ticks--;
+}
+
+/* Work a library call does in C, which the count hook sees as one
+ * instruction, charged as instructions (units of the hook's period). */
+static void fdev_charge(lua_State *L, double instructions)
+{
+    struct wsg_fdev *m = fdev_of(L);
+    double t = instructions / FDEV_HOOK_EVERY;
+
+    if (t >= (double)m->ticks) {
+        m->ticks = 0;
+        fdev_spent(L);
+    }
+    m->ticks -= (unsigned long)t;
+}
+
+/* What a wrapped library function's work is measured by. */
+enum {
+    COST_BYTES, /* its string arguments' lengths */
+    COST_LEN,   /* the elements of its first argument (a table) */
+    COST_SORT,  /* n log n comparisons of the table's n */
+    COST_REP    /* the string it makes */
+};
+
+/* Bytes that cost one instruction's worth. */
+#define FDEV_BYTES_PER_INSTRUCTION 16
+
+/* A library function (upvalue 1) called after its work (upvalue 2 says
+ * how it is measured) is charged: a loop of calls that each take long
+ * (table.insert at the front of a big table, string.rep of an empty
+ * string 2^31 times) ends at the bound as a loop of instructions does. */
+static int fdev_costly(lua_State *L)
+{
+    int kind = (int)lua_tointeger(L, lua_upvalueindex(2));
+    int top = lua_gettop(L), k;
+    double cost = 0;
+    size_t l, lsep;
+
+    switch (kind) {
+    case COST_BYTES:
+        for (k = 1; k <= top; k++)
+            if (lua_type(L, k) == LUA_TSTRING) {
+                lua_tolstring(L, k, &l);
+                cost += (double)l / FDEV_BYTES_PER_INSTRUCTION;
+            }
+        break;
+    case COST_LEN:
+    case COST_SORT:
+        if (lua_type(L, 1) == LUA_TTABLE)
+            cost = (double)lua_rawlen(L, 1);
+        if (kind == COST_SORT && cost > 1)
+            cost *= log2(cost);
+        break;
+    case COST_REP:
+        if (lua_type(L, 1) == LUA_TSTRING || lua_type(L, 1) == LUA_TNUMBER) {
+            lua_Number n = luaL_checknumber(L, 2);
+
+            luaL_checklstring(L, 1, &l);
+            luaL_optlstring(L, 3, "", &lsep);
+            if (n >= 1 && l + lsep == 0) { /* empty, however many */
+                lua_pushliteral(L, "");
+                return 1;
+            }
+            if (n >= 1)
+                cost = n * (double)(l + lsep) / FDEV_BYTES_PER_INSTRUCTION;
+        }
+        break;
+    }
+    fdev_charge(L, cost);
+    lua_pushvalue(L, lua_upvalueindex(1));
+    lua_insert(L, 1);
+    lua_call(L, top, LUA_MULTRET);
+    return lua_gettop(L);
+}
+
+/* Wrap lib.name (lib NULL: a global) as fdev_costly with kind. */
+static void fdev_wrap(lua_State *L, const char *lib, const char *name,
+                      int kind)
+{
+    if (lib)
+        lua_getglobal(L, lib);
+    else
+        lua_pushglobaltable(L);
+    lua_getfield(L, -1, name);
+    if (lua_type(L, -1) != LUA_TFUNCTION) {
+        lua_pop(L, 2);
+        return;
+    }
+    lua_pushinteger(L, kind);
+    lua_pushcclosure(L, fdev_costly, 2);
+    lua_setfield(L, -2, name);
+    lua_pop(L, 1);
+}
+
+static void fdev_costs(lua_State *L)
+{
+    static const char *const bytes[] = {"byte",  "char",    "format",
+                                        "lower", "reverse", "sub",
+                                        "upper", "len",     NULL};
+    const char *const *p;
+
+    for (p = bytes; *p; p++)
+        fdev_wrap(L, "string", *p, COST_BYTES);
+    fdev_wrap(L, "string", "rep", COST_REP);
+    fdev_wrap(L, NULL, "tostring", COST_BYTES);
+    fdev_wrap(L, NULL, "tonumber", COST_BYTES);
+    fdev_wrap(L, NULL, "unpack", COST_LEN);
+    fdev_wrap(L, "table", "unpack", COST_LEN);
+    fdev_wrap(L, "table", "insert", COST_LEN);
+    fdev_wrap(L, "table", "remove", COST_LEN);
+    fdev_wrap(L, "table", "concat", COST_LEN);
+    fdev_wrap(L, "table", "sort", COST_SORT);
 }
 
 /* ---- what the model calls: dev.* ---- */
@@ -199,6 +323,7 @@ static int fdev_call(struct wsg_fdev *m, int nargs, int nres)
     lua_State *L = m->L;
 
     m->ticks = WSG_FDEV_INSTRUCTIONS / FDEV_HOOK_EVERY;
+    lua_sethook(L, fdev_hook, LUA_MASKCOUNT, FDEV_HOOK_EVERY);
     if (lua_pcall(L, nargs, nres, 0) != LUA_OK) {
         const char *e = lua_tostring(L, -1);
 
@@ -247,6 +372,9 @@ static int fdev_start(struct wsg_fdev *m)
     fdev_remove(L, NULL, base_out);
     fdev_remove(L, "string", string_out);
     fdev_remove(L, "math", math_out);
+    fdev_costs(L);
+    /* No finalizers: Lua runs them with hooks off. */
+    lua_register(L, "setmetatable", wsg_script_setmetatable);
     lua_newtable(L);
     luaL_setfuncs(L, dev_lib, 0);
     lua_setglobal(L, "dev");
@@ -350,11 +478,12 @@ static int link_data(void *ctx, int i, uint8_t *out, size_t cap)
     if (fdev_call(m, 0, 1) < 0)
         return fdev_failed(m);
     s = lua_tolstring(m->L, -1, &k);
-    if (!s)
+    if (!s) /* not a string: no data (memcpy must not see NULL) */
         k = 0;
     if (k > cap)
         k = cap;
-    memcpy(out, s, k);
+    if (k)
+        memcpy(out, s, k);
     lua_pop(m->L, 1);
     return (int)k;
 }

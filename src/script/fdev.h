@@ -47,4 +47,9 @@ const char *wsg_fdev_name(const struct wsg_fdev *m);
 /* Bytes the model's state holds now (0 while unpowered). */
 size_t wsg_fdev_memory(const struct wsg_fdev *m);
 
+/* The scripts' setmetatable (api.c), which never marks a table for
+ * finalization: Lua runs finalizers with hooks off. */
+struct lua_State;
+int wsg_script_setmetatable(struct lua_State *L);
+
 #endif

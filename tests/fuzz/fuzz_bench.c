@@ -101,7 +101,9 @@ static void fuzz_check_flags(uint32_t f)
                ax->req_fast_stop);
     FUZZ_CHECK(!(f & (WSG_SF_SOFT_LIMIT_MINUS | WSG_SF_SOFT_LIMIT_PLUS)) ||
                ax->soft_limits);
-    FUZZ_CHECK(!(f & WSG_SF_FORCECNTL_MODE) || ax->cfg.force_sensor);
+    /* D9 comes from the force measurement fingers fitted now. */
+    FUZZ_CHECK(!(f & WSG_SF_FORCECNTL_MODE) ||
+               wsg_fingers_fmf(&B.dev.fingers));
     /* The emulator runs no scripts. */
     FUZZ_CHECK(!(f & (WSG_SF_SCRIPT_RUNNING | WSG_SF_SCRIPT_FAILURE)));
 }
@@ -114,7 +116,7 @@ static void fuzz_check_model(void)
 
     fuzz_check_axis(ax);
     FUZZ_CHECK((unsigned)ax->grasp_state <= WSG_GS_ERROR);
-    fuzz_check_flags(wsg_axis_flags(ax));
+    fuzz_check_flags(wsg_device_flags(&B.dev));
 }
 
 static void fuzz_trace_in(void *ctx, const struct wsg_session *s,
@@ -387,6 +389,11 @@ static int fuzz_quiet(void)
            ax->req_motion.kind == WSG_MOTION_NONE &&
            ax->req_cancelled.kind == WSG_MOTION_NONE && !ax->req_stop &&
            !ax->req_fast_stop;
+}
+
+struct wsg_device *fuzz_bench_device(void)
+{
+    return &B.dev;
 }
 
 void fuzz_bench_end(void)

@@ -17,6 +17,8 @@
 #include <stddef.h>
 #include <stdint.h>
 
+struct wsg_device;
+
 /* The chunk's control byte. Bit 0: session 0 (a TCP-like connection) or
  * 1 (a UDP-like peer). Bits 1-3: how many model steps follow the chunk:
  * 0, 1, 2, 5, 10, 50, 200 or 1000. Bits 4-7: the world event applied after
@@ -39,5 +41,9 @@ void fuzz_bench_begin(uint8_t cfg);
 void fuzz_bench_chunk(uint8_t ctl, const uint8_t *data, size_t len);
 /* Step until no motion is left (bounded) and check the final results. */
 void fuzz_bench_end(void);
+/* The bench's gripper, for a harness that changes what the commands do not
+ * reach (the fingers fitted, their power, their wires) between chunks; it
+ * settles the device after such a change, as the control channel does. */
+struct wsg_device *fuzz_bench_device(void);
 
 #endif

@@ -11,6 +11,11 @@
  * the pattern language, the errors, and the patterns that held the daemon
  * (%b(), a long set, a long literal, a plain find, a backtracking gsub) on
  * subjects small enough for Lua's own matcher to answer.
+ * corpus/fingers has the finger harness's (fuzz_fingers.c): each finger
+ * command in both styles, a DSA pad and an FMF finger through a grasp, a
+ * device's UART and SPI; corpus/fdev the device model harness's
+ * (fuzz_fdev.c): a model as the public scripts use one, and each
+ * behaviour of its own model over UART and SPI.
  * The output is committed; rebuild it only to change the seeds (every
  * build compiles this program, so it stays in step with the harnesses):
  *
@@ -623,6 +628,201 @@ static void gen_patterns(const char *dir)
               "c", "");
 }
 
+/* ---- corpus/fingers (fuzz_fingers.c) and corpus/fdev (fuzz_fdev.c) ---- */
+
+struct fgen {
+    uint8_t b[GEN_MAX];
+    size_t n;
+};
+
+static void fg_bytes(struct fgen *g, const void *p, size_t len)
+{
+    if (g->n + len > GEN_MAX)
+        abort();
+    memcpy(g->b + g->n, p, len);
+    g->n += len;
+}
+
+/* A finger command record (op 0..7: 60h..63h, 70h..73h). */
+static void fg_rec(struct fgen *g, uint8_t op, uint8_t ctl, const void *p,
+                   size_t len)
+{
+    uint8_t h[3] = {op, ctl, (uint8_t)len};
+
+    fg_bytes(g, h, 3);
+    fg_bytes(g, p, len);
+}
+
+/* Another command of the schema, by ID. */
+static void fg_cmd(struct fgen *g, uint8_t id, uint8_t ctl, const void *p,
+                   size_t len)
+{
+    uint8_t h[4] = {0xC0, ctl, (uint8_t)(len + 1), 0};
+
+    while (h[3] < FUZZ_NIDS && fuzz_ids[h[3]] != id)
+        h[3]++;
+    fg_bytes(g, h, 4);
+    fg_bytes(g, p, len);
+}
+
+static void fg_cmdf2(struct fgen *g, uint8_t id, uint8_t ctl, float a, float b)
+{
+    uint8_t p[8];
+
+    wsg_put_f32(p, a);
+    wsg_put_f32(p + 4, b);
+    fg_cmd(g, id, ctl, p, sizeof p);
+}
+
+/* A change between chunks (fuzz_fingers.c: op 0xE0..0xE7). */
+static void fg_event(struct fgen *g, uint8_t ev, const void *p, size_t len)
+{
+    fg_rec(g, (uint8_t)(0xE0 + ev), CTL_STEPS(STEPS_10), p, len);
+}
+
+static const uint8_t fuzz_finger_seed_ids[8] = {0x60, 0x61, 0x62, 0x63,
+                                                0x70, 0x71, 0x72, 0x73};
+
+static void gen_fingers(const char *dir)
+{
+    static const uint8_t i0 = 0, i1 = 1, i9 = 9, on1[2] = {1, 1},
+                         off1[2] = {1, 0}, one = 1, zero = 0;
+    /* kind k of finger i: byte (k << 1) | i */
+    static const uint8_t dsa0 = 3u << 1, fmf1 = (2u << 1) | 1u, none0 = 0,
+                         dev1[3] = {(4u << 1) | 1u, 0x10, 25};
+    static const uint8_t uart1[4] = {0x00, 0xC2, 0x01, 0x00}; /* 115200 */
+    static const uint8_t spi1[6] = {0x40, 0x42, 0x0F, 0x00, 8, 0};
+    struct fgen g;
+    int op;
+
+    /* Each command alone, in both styles, on the default fingers. */
+    for (op = 0; op < 8; op++) {
+        char name[32];
+
+        g.n = 0;
+        fg_bytes(&g, &zero, 1);
+        fg_rec(&g, (uint8_t)op, CTL_STEPS(STEPS_10),
+               (op & 3) == 2 ? &one : NULL, (op & 3) == 2 ? 1 : 0);
+        if (op < 4) {
+            fg_rec(&g, (uint8_t)op, CTL_STEPS(STEPS_10),
+                   (op & 3) == 2 ? on1 : &i1, (op & 3) == 2 ? 2 : 1);
+            fg_rec(&g, (uint8_t)op, CTL_STEPS(STEPS_10), &i9, 1);
+        }
+        snprintf(name, sizeof name, "finger-%02x", fuzz_finger_seed_ids[op]);
+        gen_write(dir, "fingers", name, g.b, g.n);
+    }
+
+    /* A DSA pad and an FMF finger feel a grasp; power off and on. */
+    g.n = 0;
+    fg_bytes(&g, "\x04", 1); /* force sensor */
+    fg_event(&g, 0, &dsa0, 1);
+    fg_event(&g, 0, &fmf1, 1);
+    fg_cmd(&g, WSG_CMD_HOMING, CTL_STEPS(STEPS_1000), &i0, 1);
+    fg_cmd(&g, WSG_CMD_HOMING, CTL_STEPS(STEPS_1000), NULL, 0);
+    fg_cmd(&g, WSG_CMD_GET_GRASP_STATE,
+           CTL_STEPS(STEPS_NONE) | CTL_WORLD(WORLD_PART), "\x46", 1);
+    fg_cmdf2(&g, WSG_CMD_GRASP, CTL_STEPS(STEPS_1000), 30.0f, 50.0f);
+    fg_rec(&g, 3, CTL_STEPS(STEPS_10), NULL, 0);
+    fg_rec(&g, 7, CTL_STEPS(STEPS_10), NULL, 0);
+    fg_rec(&g, 1, CTL_STEPS(STEPS_10), &i0, 1);
+    fg_event(&g, 3, "\x19\x32", 2); /* a 5 x 10 mm patch */
+    fg_event(&g, 2, NULL, 0);       /* tare */
+    fg_rec(&g, 7, CTL_STEPS(STEPS_10), NULL, 0);
+    fg_rec(&g, 6, CTL_STEPS(STEPS_10), &zero, 1);
+    fg_rec(&g, 7, CTL_STEPS(STEPS_10), NULL, 0);
+    fg_rec(&g, 2, CTL_STEPS(STEPS_10), off1, 2);
+    fg_rec(&g, 3, CTL_STEPS(STEPS_10), &i1, 1);
+    fg_event(&g, 0, &none0, 1);
+    fg_rec(&g, 2, CTL_STEPS(STEPS_10), &one, 1);
+    fg_rec(&g, 3, CTL_STEPS(STEPS_10), NULL, 0);
+    fg_cmd(&g, WSG_CMD_TARE, CTL_STEPS(STEPS_10), NULL, 0);
+    gen_write(dir, "fingers", "seq-grasp", g.b, g.n);
+
+    /* Custom electronics on finger 2: UART echo, SPI, a failing link. */
+    g.n = 0;
+    fg_bytes(&g, &zero, 1);
+    fg_event(&g, 0, dev1, sizeof dev1);
+    fg_event(&g, 4, uart1, sizeof uart1);
+    fg_event(&g, 6, "\x01za", 3);
+    fg_rec(&g, 5, CTL_STEPS(STEPS_200), NULL, 0);
+    fg_event(&g, 7, &one, 1);
+    fg_rec(&g, 7, CTL_STEPS(STEPS_10), NULL, 0);
+    fg_event(&g, 5, spi1, sizeof spi1);
+    fg_event(&g, 7, "\x03\x01\x02\x03", 4);
+    fg_event(&g, 0, "\x09\x01\x10", 3); /* its data() fails */
+    fg_rec(&g, 7, CTL_STEPS(STEPS_10), NULL, 0);
+    fg_cmd(&g, WSG_CMD_GET_SYSTEM_STATE, CTL_STEPS(STEPS_10), NULL, 0);
+    fg_rec(&g, 6, CTL_STEPS(STEPS_10), &zero, 1);
+    fg_rec(&g, 6, CTL_STEPS(STEPS_10), &one, 1);
+    fg_rec(&g, 5, CTL_STEPS(STEPS_10), NULL, 0);
+    gen_write(dir, "fingers", "seq-device", g.b, g.n);
+}
+
+/* fuzz_fdev.c's records: [op][length][bytes]. */
+static void fd_rec(struct fgen *g, uint8_t op, const void *p, size_t len)
+{
+    uint8_t h[2] = {op, (uint8_t)len};
+
+    fg_bytes(g, h, 2);
+    fg_bytes(g, p, len);
+}
+
+static void gen_fdev(const char *dir)
+{
+    static const char tip[] =
+        "DATA_SIZE = 4\n"
+        "function on_uart(b)\n"
+        "  if b:find('z', 1, true) then dev.send('x') end\n"
+        "  if b:find('a', 1, true) then dev.send(string.rep('\\0', 50)) end\n"
+        "end\n"
+        "function on_spi(tx) return string.char(42) .. tx end\n"
+        "function data() return 'abcd' end\n";
+    static const uint8_t baud[4] = {0x00, 0xC2, 0x01, 0x00};
+    static const uint8_t steps = 10, off = 0, on = 0;
+    struct fgen g;
+    unsigned k;
+
+    /* The example the public scripts follow: power cycle, z/x, a and 50
+     * bytes, an SPI poll, 63h. */
+    g.n = 0;
+    fg_bytes(&g, "\x01", 1);
+    fg_bytes(&g, tip, sizeof tip); /* with its NUL */
+    fd_rec(&g, 4, &off, 1);
+    fd_rec(&g, 4 | 8, &on, 1);
+    fd_rec(&g, 0, baud, sizeof baud);
+    fd_rec(&g, 1, "z", 1);
+    fd_rec(&g, 3, &steps, 1);
+    fd_rec(&g, 6, NULL, 0);
+    fd_rec(&g, 1, "a", 1);
+    fd_rec(&g, 3, &steps, 1);
+    fd_rec(&g, 6, NULL, 0);
+    fd_rec(&g, 5, NULL, 0);
+    fd_rec(&g, 7, NULL, 0);
+    fd_rec(&g, 2, "\x00\x00", 2);
+    gen_write(dir, "fdev", "tip", g.b, g.n);
+
+    /* Each of fdev_model's behaviours, over the UART and over SPI. */
+    for (k = 0; k < 16; k++) {
+        uint8_t b = (uint8_t)(k | 0x10);
+        char name[32];
+
+        g.n = 0;
+        fg_bytes(&g, "\x00\x08", 2); /* DATA_SIZE 8 */
+        fd_rec(&g, 0, baud, sizeof baud);
+        fd_rec(&g, 1, &b, 1);
+        fd_rec(&g, 3, &steps, 1);
+        fd_rec(&g, 6, NULL, 0);
+        fd_rec(&g, 5, NULL, 0);
+        fd_rec(&g, 4, &off, 1);
+        fd_rec(&g, 4 | 8, &on, 1);
+        fd_rec(&g, 7, NULL, 0);
+        fd_rec(&g, 2, &b, 1);
+        fd_rec(&g, 5, NULL, 0);
+        snprintf(name, sizeof name, "model-%02u", k);
+        gen_write(dir, "fdev", name, g.b, g.n);
+    }
+}
+
 int main(int argc, char **argv)
 {
     /* README's Homing request, and one with a SIZE above any command. */
@@ -694,5 +894,7 @@ int main(int argc, char **argv)
 
     gen_script(dir);
     gen_patterns(dir);
+    gen_fingers(dir);
+    gen_fdev(dir);
     return 0;
 }

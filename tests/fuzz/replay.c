@@ -22,6 +22,8 @@ int fuzz_script_one(const uint8_t *data, size_t size);
 int fuzz_gcl_one(const uint8_t *data, size_t size);
 int fuzz_sse_one(const uint8_t *data, size_t size);
 int fuzz_match_one(const uint8_t *data, size_t size);
+int fuzz_fingers_one(const uint8_t *data, size_t size);
+int fuzz_fdev_one(const uint8_t *data, size_t size);
 
 /* Largest input replayed; libFuzzer's default -max_len is 4096. */
 #define REPLAY_MAX (1u << 20)
@@ -46,6 +48,8 @@ static int replay_file(const char *path)
     fuzz_gcl_one(buf, n);
     fuzz_sse_one(buf, n);
     fuzz_match_one(buf, n);
+    fuzz_fingers_one(buf, n);
+    fuzz_fdev_one(buf, n);
     return 0;
 }
 

@@ -1,7 +1,7 @@
 #!/bin/bash
 # run.sh: fuzz one libFuzzer harness for a fixed time, the ctest tests
 # fuzz_H_run (H = frames, commands, config, control, script, gcl, sse,
-# match) of a -DWSG_FUZZ=ON build (clang).
+# match, fingers, fdev) of a -DWSG_FUZZ=ON build (clang).
 # libFuzzer starts from a fresh copy of the committed seed corpus in the
 # build tree and adds what it finds interesting to that copy only: the
 # source tree is never written.

@@ -403,3 +403,45 @@ int c_raw(struct ctx *x, int argc, char **argv)
     }
     return r.status == WSG_E_SUCCESS ? EXIT_OK : gripper_error(r.id, r.status);
 }
+
+/* finger I info|flags|data|power on|off over the gripper's interface:
+ * the 4.x style, one block per finger (60h..63h for finger 0, 70h..73h
+ * for finger 1; docs/fingers.md), decoded by the schema's reply rows.
+ * Through --control the line goes to the channel as it is (its `finger`
+ * reads both, fits a kind, switches power, reads a DSA frame). */
+int c_finger(struct ctx *x, int argc, char **argv)
+{
+    static const char *const what[] = {"info", "flags", "power", "data"};
+    uint8_t base, on;
+    int k;
+
+    if (x->c.kind == LINK_CONTROL)
+        return c_channel(x, argc, argv);
+    if (argc < 2 || (strcmp(argv[0], "0") != 0 && strcmp(argv[0], "1") != 0)) {
+        err("finger: 0|1 info|flags|data|power on|off (a kind: with "
+            "--control)");
+        return EXIT_USAGE;
+    }
+    base = argv[0][0] == '0' ? 0x60 : 0x70;
+    for (k = 0; k < 4 && strcmp(argv[1], what[k]) != 0; k++)
+        ;
+    if (k == 4) {
+        err("finger: %s is not info, flags, data or power (a kind: with "
+            "--control)",
+            argv[1]);
+        return EXIT_USAGE;
+    }
+    if (k != 2) {
+        if (argc != 2) {
+            err("finger: %s takes no value", argv[1]);
+            return EXIT_USAGE;
+        }
+        return simple(x, (uint8_t)(base + k), NULL, 0, 0);
+    }
+    if (argc != 3 || (strcmp(argv[2], "on") != 0 && strcmp(argv[2], "off"))) {
+        err("finger: power on|off");
+        return EXIT_USAGE;
+    }
+    on = strcmp(argv[2], "on") == 0;
+    return simple(x, (uint8_t)(base + 2), &on, 1, 0);
+}

@@ -228,6 +228,12 @@ static const struct command commands[] = {
      "control channel: a power cycle (defaults, not referenced, motion "
      "aborted, streams ended)",
      "wsgctl --control 127.0.0.1:2000 reset", VIA_CONTROL},
+    {"finger", c_finger, 0, 3, 1,
+     "[0|1 info|flags|data|power on|off | 0|1 KIND|device FILE|cells]",
+     "a finger: 60h..63h (finger 0) or 70h..73h (finger 1), decoded; with "
+     "--control the channel's finger: both as JSON, fit none, generic, "
+     "fmf, dsa or a device model, power, a DSA pad's cells",
+     "wsgctl finger 1 data", VIA_BOTH},
     {"decode", c_decode, 0, 0, 0, "",
      "decode hex packets from stdin (spaces, commas, 0x, h suffix; "
      "any line split); exit 1 if a checksum is bad or a packet incomplete",

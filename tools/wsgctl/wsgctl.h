@@ -137,6 +137,7 @@ int c_stop(struct ctx *x, int argc, char **argv);
 int c_fast_stop(struct ctx *x, int argc, char **argv);
 int c_ack(struct ctx *x, int argc, char **argv);
 int c_info(struct ctx *x, int argc, char **argv);
+int c_finger(struct ctx *x, int argc, char **argv);
 int c_limits(struct ctx *x, int argc, char **argv);
 int c_state(struct ctx *x, int argc, char **argv);
 int c_width(struct ctx *x, int argc, char **argv);
