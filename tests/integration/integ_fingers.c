@@ -166,6 +166,37 @@ static void test_control(struct emu_client *c, struct ctl *k)
     CHECK_EQ(p[0], WSG_FINGER_TYPE_GENERIC);
 }
 
+/* Device models that would run past their instruction bound: one that
+ * catches the bound's error with pcall in a loop fails with it, and
+ * xpcall, whose handler Lua calls again for an error inside it, is not
+ * there; each is refused when fitted, and the daemon answers on. */
+static void test_hostile_models(struct emu_client *c, struct ctl *k)
+{
+    static const struct {
+        const char *src, *reason;
+    } models[] = {
+        {"while true do pcall(function() while true do end end) end\n",
+         "ran over its 1000000 instructions"},
+        {"while true do\n"
+         "  xpcall(function() error('x') end, function() while true do end "
+         "end)\n"
+         "end\n",
+         "'xpcall' (a nil value)"}};
+    char path[256], cmd[300];
+    uint8_t p[512];
+    size_t i, n;
+    const char *ans;
+
+    for (i = 0; i < sizeof models / sizeof models[0]; i++) {
+        emu_temp_file(path, sizeof path, "hostile", models[i].src);
+        snprintf(cmd, sizeof cmd, "finger 0 device %s", path);
+        ans = ctl_cmd(k, cmd);
+        CHECK(!ctl_is_ok(ans) && strstr(ans, models[i].reason) != NULL);
+        CHECK_EQ(one(c, 0x60, NULL, 0, p, &n), WSG_E_SUCCESS);
+        remove(path);
+    }
+}
+
 static void test_config(const char *exe)
 {
     char conf[256];
@@ -268,6 +299,7 @@ int main(int argc, char **argv)
     test_info(&c);
     test_holding(&e, &c, &k);
     test_control(&c, &k);
+    test_hostile_models(&c, &k);
     emu_close(&c);
     ctl_close(&k);
     CHECK_EQ(emu_stop(&e), 0);
