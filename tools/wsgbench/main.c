@@ -609,6 +609,8 @@ int main(int argc, char **argv)
         b.failures++;
     if (b.o.fleet > 0 && bench_fleet(&b) < 0)
         b.failures++;
+    if (bench_fingers(&b) < 0)
+        b.failures++;
     if (bench_physics(&b) < 0)
         b.failures++;
     print_table(&b);

@@ -208,6 +208,8 @@ int bench_timescale(struct bench *b);
 /* ---- the MuJoCo plant (physics.c) ---- */
 
 int bench_physics(struct bench *b);
+/* fingers.c */
+int bench_fingers(struct bench *b);
 
 /* ---- the fleet (fleet.c) ---- */
 
