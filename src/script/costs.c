@@ -111,6 +111,26 @@ static int api_costly(lua_State *L)
     return n;
 }
 
+/* string.rep: Lua's, but one whose result is empty is "" at once. Lua's
+ * allocates the result first, so the memory cap bounds its loop, except
+ * for an empty string repeated with an empty separator: that loop copies
+ * nothing 2^31 times, some seconds in one call, and allocates nothing the
+ * allocator could count. */
+static int api_rep(lua_State *L)
+{
+    lua_CFunction rep = lua_tocfunction(L, lua_upvalueindex(1));
+    size_t l, lsep = 0;
+
+    luaL_checklstring(L, 1, &l);
+    luaL_checkinteger(L, 2);
+    luaL_optlstring(L, 3, "", &lsep);
+    if (l == 0 && lsep == 0) {
+        lua_pushliteral(L, "");
+        return 1;
+    }
+    return rep(L);
+}
+
 static void cost_wrap(lua_State *L, const char *name, int kind)
 {
     lua_getfield(L, -1, name);
@@ -121,6 +141,11 @@ static void cost_wrap(lua_State *L, const char *name, int kind)
 
 void wsg_script_open_costs(lua_State *L)
 {
+    lua_getglobal(L, LUA_STRLIBNAME);
+    lua_getfield(L, -1, "rep");
+    lua_pushcclosure(L, api_rep, 1);
+    lua_setfield(L, -2, "rep");
+    lua_pop(L, 1);
     lua_getglobal(L, LUA_TABLIBNAME);
     cost_wrap(L, "insert", COST_INSERT);
     cost_wrap(L, "remove", COST_REMOVE);

@@ -63,7 +63,7 @@
  *   looping message handler, loops where nothing can yield (a
  *   __tostring, a load reader), library calls that work long without
  *   instructions (collectgarbage, tonumber, table.insert and
- *   remove)) leaves every Loop (06h) answered within
+ *   remove, string.rep of nothing)) leaves every Loop (06h) answered within
  *   HOG_BOUND_MS while it runs, and SIGTERM ends the daemon at once.
  */
 #define _GNU_SOURCE /* mkdtemp */
@@ -1946,6 +1946,7 @@ static const struct {
     {11, "full collections of 8 MB", NULL},
     {12, "tonumber of a megabyte", NULL},
     {13, "insert and remove at the front of 200,000", NULL},
+    {14, "string.rep of nothing 2^31 - 1 times", NULL},
 };
 
 /* One hog in a daemon of its own: Loops every 20 ms while it runs, each

@@ -108,7 +108,7 @@ hogs[12] = function()
   return function() return tonumber(s) end
 end
 
--- and insert and remove at the front of 200,000 elements.
+-- insert and remove at the front of 200,000 elements,
 hogs[13] = function()
   local t = {}
   for i = 1, 200000 do t[i] = i end
@@ -116,6 +116,12 @@ hogs[13] = function()
     table.insert(t, 1, 0)
     return table.remove(t, 1)
   end
+end
+
+-- and string.rep of nothing 2^31 - 1 times (nothing to allocate, so
+-- nothing the allocator counts).
+hogs[14] = function()
+  return function() return string.rep("", 2 ^ 31 - 1) end
 end
 
 cmd.register(0xB0)
