@@ -557,6 +557,9 @@ static const struct wsg_plant_ops mj_ops = {
     "mujoco", mj_step_plant, mj_sense, mj_contact,
     mj_place, mj_object,     mj_pull,  mj_destroy};
 
+/* Built as the daemon's module (mujoco_load.c), the version it checks. */
+const char wsg_plant_mujoco_version[] = WSG_VERSION;
+
 int wsg_plant_mujoco_available(void)
 {
     return 1;

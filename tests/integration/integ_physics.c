@@ -20,10 +20,16 @@
  * - fingers: --finger0 fmf --finger1 dsa read the contact: the FMF's force
  *   near 45h's, the DSA cells under the box's face set and adding up to
  *   the pad's force; both 0 with no object;
- * - wsgctl: its object and pull, through the control channel.
+ * - wsgctl: its object and pull, through the control channel;
+ * - module: an emulator of the built-in plant maps no MuJoCo (it would
+ *   cost each emulator of a fleet some 2 MiB), --physics mujoco loads the
+ *   plant's module and MuJoCo with it, and a program with no module
+ *   beside it or in its prefix refuses --physics mujoco, saying why.
  *
  * Skips (77) in a build without MuJoCo.
  */
+#define _POSIX_C_SOURCE 200809L /* mkdtemp */
+
 #include "check.h"
 #include "emu.h"
 #include "emu_ctl.h"
@@ -33,6 +39,8 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 /* docs/plants.md's tolerances. */
 #define TOL_MM     0.5
@@ -551,6 +559,58 @@ static void test_wsgctl(const char *exe)
     stop(&e, &k, &c);
 }
 
+/* Whether process pid maps a file whose path contains name. */
+static int maps_has(pid_t pid, const char *name)
+{
+    static char maps[1 << 20];
+    char path[64];
+
+    snprintf(path, sizeof path, "/proc/%ld/maps", (long)pid);
+    REQUIRE(emu_slurp(path, maps, sizeof maps) > 0);
+    return strstr(maps, name) != NULL;
+}
+
+static void test_module(const char *exe)
+{
+    const char *builtin[] = {"--tcp", "127.0.0.1:0", NULL};
+    const char *physics[] = {"--tcp", "127.0.0.1:0", "--physics", "mujoco",
+                             NULL};
+    char dir[] = "/tmp/integ_physics.XXXXXX", copy[64], err[1024];
+    struct emu e;
+    struct ctl k;
+    struct emu_client c;
+    FILE *in, *out;
+    size_t n;
+    char buf[65536];
+
+    REQUIRE(emu_start(&e, exe, builtin) == 0);
+    CHECK(!maps_has(e.pid, "mujoco"));
+    CHECK_EQ(emu_stop(&e), 0);
+
+    start(&e, &k, &c, exe, NULL);
+    CHECK(maps_has(e.pid, "/plants/mujoco.so"));
+    CHECK(maps_has(e.pid, "libmujoco"));
+    stop(&e, &k, &c);
+
+    /* The program alone in a directory: no module to load. */
+    REQUIRE(mkdtemp(dir) != NULL);
+    snprintf(copy, sizeof copy, "%s/wsgemu", dir);
+    in = fopen(exe, "rb");
+    out = fopen(copy, "wb");
+    REQUIRE(in && out);
+    while ((n = fread(buf, 1, sizeof buf, in)) > 0)
+        REQUIRE(fwrite(buf, 1, n, out) == n);
+    fclose(in);
+    REQUIRE(fclose(out) == 0);
+    REQUIRE(chmod(copy, 0755) == 0);
+    CHECK_EQ(emu_run(copy, physics, EMU_READY_MS, NULL, 0, err, sizeof err),
+             1);
+    CHECK(strstr(err, "MuJoCo plant is not installed") != NULL);
+    CHECK(strstr(err, "/plants/mujoco.so") != NULL);
+    remove(copy);
+    rmdir(dir);
+}
+
 int main(int argc, char **argv)
 {
     const char *exe = emu_exe(argc, argv);
@@ -576,6 +636,8 @@ int main(int argc, char **argv)
         test_fingers(exe);
     if (!strcmp(part, "all") || !strcmp(part, "wsgctl"))
         test_wsgctl(exe);
+    if (!strcmp(part, "all") || !strcmp(part, "module"))
+        test_module(exe);
     TEST_EXIT();
 #endif
 }

@@ -12,13 +12,15 @@
 #      logrotate's snippet (run by logrotate, where installed, on a
 #      scratch copy of /var/log) rotates wsgemu.service's log and every
 #      wsgemu@NAME's, and signals (SIGHUP) each service whose log it
-#      rotated, and no other.
+#      rotated, and no other; where the build has the MuJoCo plant, its
+#      module is installed and the installed wsgemu loads it.
 #   2. the .deb from cpack: its fields (name, version, architecture,
 #      dependencies, conffiles), its changelog (this version) and its
 #      files; lintian finds no error and no warning in it (where lintian
 #      is installed; scripts/deps.sh --test installs it); dpkg installs it into a
 #      scratch root with a database of its own, the installed wsgemu
-#      serves with the installed config, wsgctl talks to it; dpkg purges
+#      serves with the installed config, wsgctl talks to it, and with
+#      --physics mujoco from the package's module; dpkg purges
 #      it without leaving a file behind.
 #   3. `systemd-analyze verify` on the installed units (wsgemu.service
 #      and the template wsgemu@.service), with the installed man pages
@@ -161,6 +163,26 @@ version() {
         fail "$name --version printed '$out', not '$name $VERSION'"
 }
 
+# physics ROOT WSGEMU WSGCTL: where the build has the MuJoCo plant, its
+# module is installed below ROOT (LIBDIR/wsgemu/plants/mujoco.so), and that wsgemu finds
+# it there for --physics mujoco and serves.
+physics() {
+    local root=$1 emu=$2 ctlexe=$3 found
+    if [ ! -f "$BUILD/plants/mujoco.so" ]; then
+        check "this build has no MuJoCo plant: --physics mujoco not run (skipped)"
+        return 0
+    fi
+    check "the MuJoCo plant's module is installed, and $emu loads it"
+    found=$(cd "$root" && find . -path '*/lib/*wsgemu/plants/mujoco.so')
+    [ -n "$found" ] || fail "no lib/.../wsgemu/plants/mujoco.so below $root"
+    start_emu physics "$emu" --physics mujoco --tcp 127.0.0.1:0
+    echo "    $found; $READY"
+    grep -q "${found#.}" "/proc/$EMU_PID/maps" ||
+        fail "$emu --physics mujoco runs without the installed module"
+    talk "$ctlexe" "$(tcp_port)"
+    stop_emu physics
+}
+
 # has_files ROOT PATH...: each PATH is a file below ROOT.
 has_files() {
     local root=$1 missing=""
@@ -279,6 +301,7 @@ echo "    $READY"
 port=$(tcp_port)
 talk "$P/bin/wsgctl" "$port"
 stop_emu plain
+physics "$P" "$P/bin/wsgemu" "$P/bin/wsgctl"
 
 # The config file as installed; the command line overrides its ports.
 check "wsgemu --config $P/etc/wsgemu/wsgemu.conf (free ports) starts"
@@ -508,6 +531,7 @@ start_emu deb "$R/usr/bin/wsgemu" --config "$R/etc/wsgemu/wsgemu.conf" \
 echo "    $READY"
 talk "$R/usr/bin/wsgctl" "$(tcp_port)"
 stop_emu deb
+physics "$R" "$R/usr/bin/wsgemu" "$R/usr/bin/wsgctl"
 
 check "dpkg --purge leaves no file of the package"
 # shellcheck disable=SC2086
