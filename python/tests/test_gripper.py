@@ -413,3 +413,45 @@ def test_finger_helpers_follow_a_grasp(wsgemu):
     assert g.finger_info(1) == (0, 0)
     with pytest.raises(ValueError):
         g.finger_info(2)
+
+
+# ---- the MuJoCo plant (docs/plants.md) ----
+
+def test_object_and_pull_with_physics(wsgemu_binary):
+    from wsgemu import DaemonError, Emulator
+    emu = Emulator(wsgemu_binary, ["--physics", "mujoco"])
+    try:
+        emu.start()
+    except DaemonError:
+        # The wheel's static program and builds without libmujoco-dev
+        # refuse --physics mujoco, saying so.
+        if "MuJoCo" in emu.stderr_text():
+            pytest.skip("this wsgemu has no MuJoCo plant")
+        raise
+    try:
+        g, c = emu.gripper, emu.control
+        c.pause()
+        home = g.home(wait=False)
+        c.step(2000)
+        home.wait()
+        assert c.object("box", 40, 20, 30, mass=0.1, friction=1) == \
+            "object box 40 20 30 0.1 1"
+        assert c.state()["object"]["kind"] == "box"
+        grasp = g.grasp(40.0, 100.0, wait=False)
+        c.step(2000)
+        grasp.wait()
+        assert g.grasp_state() == GraspState.HOLDING
+        assert g.width() == pytest.approx(40.0, abs=0.5)  # docs/plants.md
+        # Pulled harder than friction holds it: the part slips out.
+        c.pull(500)
+        c.step(500)
+        assert g.grasp_state() == GraspState.PART_LOST
+        c.object(None)
+        assert c.state()["object"] is None
+        with pytest.raises(ValueError):
+            c.object("box", 40, 20, 30, friction=1)
+    finally:
+        emu.stop()
+    with Emulator(wsgemu_binary) as builtin:
+        with pytest.raises(ControlError):
+            builtin.control.object("sphere", 30)

@@ -933,6 +933,30 @@ class Control:
         return self.command("obstacle none" if width is None
                             else "obstacle " + _num(width))
 
+    def object(self, kind: Optional[str], *size: float,
+               mass: Optional[float] = None,
+               friction: Optional[float] = None) -> str:
+        """With --physics mujoco: place an object between the fingers,
+        kind "box" (width, depth, height), "cylinder" (diameter, length) or
+        "sphere" (diameter), sizes in mm, mass in kg, friction (defaults
+        0.1 kg and 1; friction needs a mass); None removes it. Where it is
+        now: state()["object"]. ControlError on the built-in plant."""
+        if kind is None:
+            return self.command("object none")
+        if friction is not None and mass is None:
+            raise ValueError("a friction needs a mass before it")
+        words = ["object", kind, *(_num(v) for v in size)]
+        if mass is not None:
+            words.append(_num(mass))
+        if friction is not None:
+            words.append(_num(friction))
+        return self.command(" ".join(words))
+
+    def pull(self, newtons: float) -> str:
+        """With --physics mujoco: pull the object out of the fingers with
+        that force (N; 0 stops pulling)."""
+        return self.command("pull " + _num(newtons))
+
     def fault(self, name: str, on: bool = True) -> str:
         """temp-warning, temp-fault, power, current, finger: on or off."""
         return self.command("fault %s %s" % (name, "on" if on else "off"))
