@@ -212,42 +212,12 @@ static void fdev_costs(lua_State *L)
 
 /* ---- what the model calls: dev.* ---- */
 
-/* Bytes from a string or a table of numbers 0..255 into out (cap). */
-static size_t fdev_bytes(lua_State *L, int arg, uint8_t *out, size_t cap)
-{
-    size_t n, k;
-
-    if (lua_type(L, arg) == LUA_TSTRING) {
-        const char *s = lua_tolstring(L, arg, &n);
-
-        if (n > cap)
-            n = cap;
-        memcpy(out, s, n);
-        return n;
-    }
-    luaL_checktype(L, arg, LUA_TTABLE);
-    n = lua_rawlen(L, arg);
-    if (n > cap)
-        n = cap;
-    for (k = 0; k < n; k++) {
-        lua_Number v;
-
-        lua_rawgeti(L, arg, (int)k + 1);
-        v = lua_tonumber(L, -1);
-        lua_pop(L, 1);
-        if (!(v >= 0 && v <= 255) || v != (lua_Number)(int)v)
-            luaL_error(L, "byte %d is not a number 0..255", (int)k + 1);
-        out[k] = (uint8_t)v;
-    }
-    return n;
-}
-
 /* dev.send(bytes): over the UART towards the gripper; the count taken. */
 static int dev_send(lua_State *L)
 {
     struct wsg_fdev *m = fdev_of(L);
     uint8_t buf[WSG_FINGER_FIFO];
-    size_t n = fdev_bytes(L, 1, buf, sizeof buf);
+    size_t n = wsg_script_bytes(L, 1, buf, sizeof buf);
 
     lua_pushinteger(
         L, (lua_Integer)wsg_finger_device_send(m->fs, m->finger, buf, n));

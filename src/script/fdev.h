@@ -18,6 +18,7 @@
 #define WSG_SCRIPT_FDEV_H
 
 #include <stddef.h>
+#include <stdint.h>
 
 #include "wsg/finger.h"
 
@@ -51,5 +52,11 @@ size_t wsg_fdev_memory(const struct wsg_fdev *m);
  * finalization: Lua runs finalizers with hooks off. */
 struct lua_State;
 int wsg_script_setmetatable(struct lua_State *L);
+/* A script's bytes (finger.c): a string, or a table of numbers 0..255
+ * (else a Lua error naming the first that is not), into out, at most cap;
+ * how many. Scripts' finger.write and finger.spi and the models' dev.*
+ * read what they send so. */
+size_t wsg_script_bytes(struct lua_State *L, int arg, uint8_t *out,
+                        size_t cap);
 
 #endif

@@ -16,6 +16,7 @@
 #include <lauxlib.h>
 #include <string.h>
 
+#include "fdev.h"
 #include "script_impl.h"
 #include "wsg/finger.h"
 
@@ -150,8 +151,9 @@ static int finger_interface(lua_State *L)
     return 1;
 }
 
-/* Bytes from a string or a table of numbers 0..255, at most cap. */
-static size_t finger_bytes(lua_State *L, int arg, uint8_t *out, size_t cap)
+/* Bytes from a string or a table of numbers 0..255, at most cap (fdev.h:
+ * the device models take theirs so as well). */
+size_t wsg_script_bytes(lua_State *L, int arg, uint8_t *out, size_t cap)
 {
     size_t n, k;
 
@@ -194,7 +196,7 @@ static int finger_write(lua_State *L)
         return finger_fail(L, i, "no UART set up (finger.interface)");
     if (!fs->f[i].powered)
         return finger_fail(L, i, "no power");
-    n = finger_bytes(L, 2, buf, sizeof buf);
+    n = wsg_script_bytes(L, 2, buf, sizeof buf);
     wsg_script_spend(wsg_script_of(L), L, (uint32_t)n);
     lua_pushinteger(L, (lua_Integer)wsg_finger_write(fs, i, buf, n));
     return 1;
@@ -243,7 +245,7 @@ static int finger_spi(lua_State *L)
     luaL_checktype(L, 2, LUA_TTABLE);
     luaL_argcheck(L, lua_rawlen(L, 2) <= WSG_FINGER_SPI_MAX, 2,
                   "at most 256 bytes a transfer");
-    n = finger_bytes(L, 2, tx, sizeof tx);
+    n = wsg_script_bytes(L, 2, tx, sizeof tx);
     wsg_script_spend(h, L, (uint32_t)n);
     st = wsg_finger_spi(fs, i, tx, rx, n);
     if (st == WSG_E_NOT_AVAILABLE)
