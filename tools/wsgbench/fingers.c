@@ -46,29 +46,16 @@ struct fdaemon {
 static int fd_start(struct bench *b, struct fdaemon *d, const char *name,
                     char **argv)
 {
-    struct sockaddr_in sa;
-    char *v = NULL;
-    int rc = -1;
-
     link_init(&d->l, L_TCP, name);
     link_init(&d->ctl, L_TCP, name);
     d->started = 0;
     if (server_start(b, &d->s, name, argv, READY_MS) < 0)
         return -1;
     d->started = 1;
-    v = field(d->s.line, "control");
-    if (!v || parse_ipport(v, &sa) < 0 || link_tcp(&d->ctl, &sa) < 0)
-        goto out;
-    free(v);
-    v = field(d->s.line, "tcp");
-    if (!v || parse_ipport(v, &sa) < 0 || link_tcp(&d->l, &sa) < 0)
-        goto out;
-    rc = 0;
-out:
-    if (!v)
-        msg("%s: no tcp= or control= in its ready line", name);
-    free(v);
-    return rc;
+    if (link_ready(&d->ctl, d->s.line, "control") < 0 ||
+        link_ready(&d->l, d->s.line, "tcp") < 0)
+        return -1;
+    return 0;
 }
 
 static int fd_stop(struct fdaemon *d)

@@ -33,8 +33,7 @@ static int hold(struct bench *b, const char *name, char **argv,
 {
     struct server s;
     struct link l, ctl;
-    struct sockaddr_in sa;
-    char line[256], *c = NULL;
+    char line[256];
     uint8_t dir = 0, pl[8];
     int st, rc = -1;
 
@@ -42,12 +41,8 @@ static int hold(struct bench *b, const char *name, char **argv,
     link_init(&ctl, L_TCP, name);
     if (server_start(b, &s, name, argv, READY_MS) < 0)
         return 1;
-    c = field(s.line, "control");
-    if (!c || parse_ipport(c, &sa) < 0 || link_tcp(&ctl, &sa) < 0)
-        goto cleanup;
-    free(c);
-    c = field(s.line, "tcp");
-    if (!c || parse_ipport(c, &sa) < 0 || link_tcp(&l, &sa) < 0)
+    if (link_ready(&ctl, s.line, "control") < 0 ||
+        link_ready(&l, s.line, "tcp") < 0)
         goto cleanup;
     if (ctl_cmd(&ctl, world, line, sizeof line) < 0)
         goto cleanup;
@@ -70,7 +65,6 @@ static int hold(struct bench *b, const char *name, char **argv,
     sleep_s(0.1);
     rc = measure_moving(&ctl, s.pid, b->o.move_s, &h->rate, &h->ovr, &h->cpu);
 cleanup:
-    free(c);
     link_close(&l);
     wsg_client_close(&ctl.c);
     if (server_stop(&s) < 0)
@@ -87,8 +81,7 @@ static int cycle_x100(struct bench *b, double *wall, double *sim)
         "--time-scale", "100",   "--physics",   "mujoco",    NULL};
     struct server s;
     struct link l, ctl;
-    struct sockaddr_in sa;
-    char line[256], *c = NULL;
+    char line[256];
     uint8_t dir = 0, pl[8];
     double sim0, sim1;
     uint64_t w0, w1;
@@ -105,12 +98,8 @@ static int cycle_x100(struct bench *b, double *wall, double *sim)
     if (server_start(b, &s, "wsgemu --physics mujoco x100", argv, READY_MS) <
         0)
         return -1;
-    c = field(s.line, "control");
-    if (!c || parse_ipport(c, &sa) < 0 || link_tcp(&ctl, &sa) < 0)
-        goto cleanup;
-    free(c);
-    c = field(s.line, "tcp");
-    if (!c || parse_ipport(c, &sa) < 0 || link_tcp(&l, &sa) < 0)
+    if (link_ready(&ctl, s.line, "control") < 0 ||
+        link_ready(&l, s.line, "tcp") < 0)
         goto cleanup;
     if (ctl_cmd(&ctl, "object box 40 20 30", line, sizeof line) < 0 ||
         strncmp(line, "ok", 2) != 0 || ctl_time(&ctl, &sim0, &w0) < 0)
@@ -133,7 +122,6 @@ static int cycle_x100(struct bench *b, double *wall, double *sim)
     *sim = sim1 - sim0;
     rc = 0;
 cleanup:
-    free(c);
     link_close(&l);
     wsg_client_close(&ctl.c);
     if (server_stop(&s) < 0)

@@ -75,10 +75,6 @@ static int sd_start(struct bench *b, struct sdaemon *d, const char *file,
     char path[PATH_MAX];
     char *argv[] = {b->emu_exe,    "--tcp",    "127.0.0.1:0", "--control",
                     "127.0.0.1:0", "--script", path,          NULL};
-    struct sockaddr_in sa;
-    char *v;
-    int rc = -1;
-
     link_init(&d->l, L_TCP, name);
     link_init(&d->ctl, L_TCP, "wsgemu --script control");
     d->started = 0;
@@ -86,19 +82,10 @@ static int sd_start(struct bench *b, struct sdaemon *d, const char *file,
         server_start(b, &d->s, name, argv, READY_MS) < 0)
         return -1;
     d->started = 1;
-    v = field(d->s.line, "control");
-    if (!v || parse_ipport(v, &sa) < 0 || link_tcp(&d->ctl, &sa) < 0)
-        goto out;
-    free(v);
-    v = field(d->s.line, "tcp");
-    if (!v || parse_ipport(v, &sa) < 0 || link_tcp(&d->l, &sa) < 0)
-        goto out;
-    rc = 0;
-out:
-    if (rc < 0 && !v)
-        msg("%s: no tcp= or control= in its ready line", name);
-    free(v);
-    return rc;
+    if (link_ready(&d->ctl, d->s.line, "control") < 0 ||
+        link_ready(&d->l, d->s.line, "tcp") < 0)
+        return -1;
+    return 0;
 }
 
 /* Its connection closed (07h first), its control channel, the server. 0,

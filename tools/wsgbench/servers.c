@@ -243,6 +243,22 @@ char *field(const char *line, const char *name)
     return NULL;
 }
 
+/* Connect l over TCP to the address of field key= ("tcp", "control") of
+ * ready line line. 0, or -1 (reported). */
+int link_ready(struct link *l, const char *line, const char *key)
+{
+    struct sockaddr_in sa;
+    char *v = field(line, key);
+    int rc = -1;
+
+    if (!v)
+        msg("no %s= in the ready line \"%.80s\"", key, line);
+    else if (parse_ipport(v, &sa) == 0 && link_tcp(l, &sa) == 0)
+        rc = 0;
+    free(v);
+    return rc;
+}
+
 /* "A.B.C.D:PORT" (anything after the port is ignored: ">REMOTE"). */
 int parse_ipport(const char *s, struct sockaddr_in *sa)
 {

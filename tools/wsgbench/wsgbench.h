@@ -156,6 +156,7 @@ int server_start(struct bench *b, struct server *s, const char *name,
 int server_stop(struct server *s);
 char *field(const char *line, const char *name);
 int parse_ipport(const char *s, struct sockaddr_in *sa);
+int link_ready(struct link *l, const char *line, const char *key);
 int attach_lacks(const struct bench *b, const char *key, const char *rows);
 int attach_nopid(const struct bench *b, const char *what);
 int proc_read(pid_t pid, struct proc_sample *s);
