@@ -36,38 +36,6 @@
 #define WSG_BENCH_FINGERS "packaging/fingers"
 #endif
 
-/* A wsgemu of the bench's own with a connection and its control channel. */
-struct fdaemon {
-    struct server s;
-    struct link l, ctl;
-    int started;
-};
-
-static int fd_start(struct bench *b, struct fdaemon *d, const char *name,
-                    char **argv)
-{
-    link_init(&d->l, L_TCP, name);
-    link_init(&d->ctl, L_TCP, name);
-    d->started = 0;
-    if (server_start(b, &d->s, name, argv, READY_MS) < 0)
-        return -1;
-    d->started = 1;
-    if (link_ready(&d->ctl, d->s.line, "control") < 0 ||
-        link_ready(&d->l, d->s.line, "tcp") < 0)
-        return -1;
-    return 0;
-}
-
-static int fd_stop(struct fdaemon *d)
-{
-    link_close(&d->l);
-    wsg_client_close(&d->ctl.c);
-    if (!d->started)
-        return 0;
-    d->started = 0;
-    return server_stop(&d->s);
-}
-
 /* One request and its answer: ID id, E_SUCCESS and want bytes after the
  * status (want < 0: any). The time in us. 0, or -1 (reported). */
 static int request(struct link *l, uint8_t id, long want, double *us)
@@ -106,14 +74,14 @@ static int rows_dsa(struct bench *b)
     char *argv[] = {b->emu_exe,    "--tcp",     "127.0.0.1:0", "--control",
                     "127.0.0.1:0", "--finger0", "dsa",         NULL};
     struct dist dd[2] = {{NAN, NAN, NAN}, {NAN, NAN, NAN}};
-    struct fdaemon d;
+    struct emud d;
     struct row *r;
     int rc = -1;
 
-    if (fd_start(b, &d, "wsgemu --finger0 dsa", argv) == 0 &&
+    if (emud_start(b, &d, "wsgemu --finger0 dsa", argv) == 0 &&
         alternate(b, dsa_take, NULL, &d.l, dd) == 0)
         rc = 0;
-    if (fd_stop(&d) < 0)
+    if (emud_stop(&d) < 0)
         rc = -1;
     r = add_row(b, "DSA 63h 168 B round trip median (us)", dd[EMU].p50,
                 dd[REF].p50, 1);
@@ -129,7 +97,7 @@ static int rows_poll(struct bench *b)
     char *argv[] = {b->emu_exe,    "--tcp",     "127.0.0.1:0", "--control",
                     "127.0.0.1:0", "--finger0", "dsa",         "--finger1",
                     "fmf",         NULL};
-    struct fdaemon d;
+    struct emud d;
     struct proc_sample a, z;
     double s0, o0, s1, o1, ovr = NAN, cpu = NAN;
     uint8_t dir = 0, pl[9];
@@ -137,7 +105,7 @@ static int rows_poll(struct bench *b)
     struct wsg_client_frame f;
     int rc = -1, st;
 
-    if (fd_start(b, &d, "wsgemu --finger0 dsa --finger1 fmf", argv) < 0)
+    if (emud_start(b, &d, "wsgemu --finger0 dsa --finger1 fmf", argv) < 0)
         goto cleanup;
     st = link_motion(&d.l, WSG_CMD_HOMING, &dir, 1);
     if (st != WSG_E_SUCCESS) {
@@ -173,7 +141,7 @@ static int rows_poll(struct bench *b)
         goto cleanup;
     rc = 0;
 cleanup:
-    if (fd_stop(&d) < 0)
+    if (emud_stop(&d) < 0)
         rc = -1;
     add_row(b, "63h+73h 100 Hz moving: CPU % of core", cpu, NOT_APPLIED, 1);
     set_target(add_row(b, "63h+73h 100 Hz moving: step overruns", ovr,
@@ -189,7 +157,7 @@ static int rows_tip(struct bench *b)
     char *argv[] = {b->emu_exe,    "--tcp",     "127.0.0.1:0", "--control",
                     "127.0.0.1:0", "--finger0", tip,           "--finger1",
                     spi,           "--script",  script,        NULL};
-    struct fdaemon d;
+    struct emud d;
     struct proc_sample a, z;
     double s0, o0, s1, o1, ovr = NAN, cpu = NAN, missed = NAN;
     uint64_t next, end;
@@ -203,7 +171,7 @@ static int rows_tip(struct bench *b)
         msg("fingers: cannot read %s: no device model row", script);
         return 0;
     }
-    if (fd_start(b, &d, "wsgemu tactile tip", argv) < 0)
+    if (emud_start(b, &d, "wsgemu tactile tip", argv) < 0)
         goto cleanup;
     /* The script powers the tip and waits for it first (some 0.5 s). */
     for (i = 0; i < 50 && request(&d.l, TIP_ID, TIP_ANSWER - 2, NULL) < 0; i++)
@@ -231,7 +199,7 @@ static int rows_tip(struct bench *b)
     missed = (double)late;
     rc = 0;
 cleanup:
-    if (fd_stop(&d) < 0)
+    if (emud_stop(&d) < 0)
         rc = -1;
     add_row(b, "UART tip 50 B/20 ms: CPU % of core", cpu, NOT_APPLIED, 1);
     set_target(

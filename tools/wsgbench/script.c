@@ -44,14 +44,6 @@
 static const int pd_rates[] = {250, 500, 1000, 2000};
 #define PD_NRATES ((int)(sizeof pd_rates / sizeof pd_rates[0]))
 
-/* A wsgemu of its own running one script, with a connection and its
- * control channel. */
-struct sdaemon {
-    struct server s;
-    struct link l, ctl;
-    int started;
-};
-
 /* The script's path; -1 (reported) when it cannot be read. */
 static int script_file(const struct bench *b, const char *name, char *out,
                        size_t cap)
@@ -69,35 +61,20 @@ static int script_file(const struct bench *b, const char *name, char *out,
     return 0;
 }
 
-static int sd_start(struct bench *b, struct sdaemon *d, const char *file,
+/* A wsgemu of its own running the script file (in --scripts). */
+static int sd_start(struct bench *b, struct emud *d, const char *file,
                     const char *name)
 {
     char path[PATH_MAX];
     char *argv[] = {b->emu_exe,    "--tcp",    "127.0.0.1:0", "--control",
                     "127.0.0.1:0", "--script", path,          NULL};
-    link_init(&d->l, L_TCP, name);
-    link_init(&d->ctl, L_TCP, "wsgemu --script control");
-    d->started = 0;
-    if (script_file(b, file, path, sizeof path) < 0 ||
-        server_start(b, &d->s, name, argv, READY_MS) < 0)
-        return -1;
-    d->started = 1;
-    if (link_ready(&d->ctl, d->s.line, "control") < 0 ||
-        link_ready(&d->l, d->s.line, "tcp") < 0)
-        return -1;
-    return 0;
-}
 
-/* Its connection closed (07h first), its control channel, the server. 0,
- * or -1 when it did not end as it should (reported). */
-static int sd_stop(struct sdaemon *d)
-{
-    link_close(&d->l);
-    wsg_client_close(&d->ctl.c);
-    if (!d->started)
-        return 0;
     d->started = 0;
-    return server_stop(&d->s);
+    link_init(&d->l, L_TCP, name);
+    link_init(&d->ctl, L_TCP, name);
+    if (script_file(b, file, path, sizeof path) < 0)
+        return -1;
+    return emud_start(b, d, name, argv);
 }
 
 /* The control channel's count of timer wakes. */
@@ -145,7 +122,7 @@ static int rt_sample(struct link *l, const uint8_t *req, size_t n, uint8_t id,
 /* One round trip on the script daemon's connection: [EMU] the script's
  * B0h, [REF] the firmware's 43h. */
 struct echo_bench {
-    struct sdaemon d;
+    struct emud d;
     uint8_t req[WSG_HEADER_LEN + 4 + WSG_CRC_LEN];
 };
 
@@ -165,7 +142,7 @@ static int bench_script_echo(struct bench *b)
 {
     static const uint8_t four[4] = {1, 2, 3, 4};
     struct echo_bench e;
-    struct sdaemon *d = &e.d;
+    struct emud *d = &e.d;
     double w0, w1, wakes = NAN;
     struct dist dd[2] = {{NAN, NAN, NAN}, {NAN, NAN, NAN}};
     int rc = -1;
@@ -186,7 +163,7 @@ static int bench_script_echo(struct bench *b)
     wakes = w1 - w0;
     rc = 0;
 cleanup:
-    if (sd_stop(d) < 0)
+    if (emud_stop(d) < 0)
         rc = -1;
     r = add_row(b, "script B0h round trip median (us)", dd[EMU].p50,
                 dd[REF].p50, 1);
@@ -223,7 +200,7 @@ struct pd_result {
 /* B1h at rate per second for secs, open loop (a late send goes out at
  * once, so the rate holds on average); answers read as they come. *owed
  * is what a previous rate left unanswered, read and dropped first. */
-static int pd_run(struct sdaemon *d, int rate, double secs, long *owed,
+static int pd_run(struct emud *d, int rate, double secs, long *owed,
                   struct pd_result *res)
 {
     uint64_t period = NS_PER_S / (uint64_t)rate, t0, end, next, now;
@@ -289,7 +266,7 @@ static int pd_run(struct sdaemon *d, int rate, double secs, long *owed,
 static int bench_script_pd(struct bench *b)
 {
     struct pd_result res[PD_NRATES];
-    struct sdaemon d;
+    struct emud d;
     struct wsg_client_frame f;
     uint8_t dir = 0;
     long owed = 0;
@@ -321,7 +298,7 @@ static int bench_script_pd(struct bench *b)
         goto cleanup;
     rc = 0;
 cleanup:
-    if (sd_stop(&d) < 0)
+    if (emud_stop(&d) < 0)
         rc = -1;
     if (done == PD_NRATES) {
         top = 0;

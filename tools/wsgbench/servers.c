@@ -259,6 +259,34 @@ int link_ready(struct link *l, const char *line, const char *key)
     return rc;
 }
 
+/* Start d from argv (named name) and connect to its control channel and
+ * TCP. 0, or -1 (reported); emud_stop() in either case. */
+int emud_start(struct bench *b, struct emud *d, const char *name, char **argv)
+{
+    link_init(&d->l, L_TCP, name);
+    link_init(&d->ctl, L_TCP, name);
+    d->started = 0;
+    if (server_start(b, &d->s, name, argv, READY_MS) < 0)
+        return -1;
+    d->started = 1;
+    if (link_ready(&d->ctl, d->s.line, "control") < 0 ||
+        link_ready(&d->l, d->s.line, "tcp") < 0)
+        return -1;
+    return 0;
+}
+
+/* Its connection closed (07h first), its control channel, the server. 0,
+ * or -1 when it did not end as it should (reported). */
+int emud_stop(struct emud *d)
+{
+    link_close(&d->l);
+    wsg_client_close(&d->ctl.c);
+    if (!d->started)
+        return 0;
+    d->started = 0;
+    return server_stop(&d->s);
+}
+
 /* "A.B.C.D:PORT" (anything after the port is ignored: ">REMOTE"). */
 int parse_ipport(const char *s, struct sockaddr_in *sa)
 {

@@ -157,6 +157,15 @@ int server_stop(struct server *s);
 char *field(const char *line, const char *name);
 int parse_ipport(const char *s, struct sockaddr_in *sa);
 int link_ready(struct link *l, const char *line, const char *key);
+/* A wsgemu of a bench's own with a TCP connection and its control
+ * channel (the finger and script rows). */
+struct emud {
+    struct server s;
+    struct link l, ctl;
+    int started;
+};
+int emud_start(struct bench *b, struct emud *d, const char *name, char **argv);
+int emud_stop(struct emud *d);
 int attach_lacks(const struct bench *b, const char *key, const char *rows);
 int attach_nopid(const struct bench *b, const char *what);
 int proc_read(pid_t pid, struct proc_sample *s);
