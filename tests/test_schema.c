@@ -54,8 +54,9 @@ static void check_layout(const struct wsg_layout *l)
         /* Only the last field takes the rest of the payload. */
         CHECK(!rest || i + 1 == l->n);
         CHECK(!rest || f->max > 0);
+        CHECK(wsg_field_type_name(f->type) != NULL);
         if (f->type == WSG_FT_ENUM8 || f->type == WSG_FT_BITS8 ||
-            f->type == WSG_FT_BITS32)
+            f->type == WSG_FT_BITS16 || f->type == WSG_FT_BITS32)
             CHECK(f->names != NULL && f->nnames > 0);
         for (j = 0; j < i; j++)
             CHECK(strcmp(f->name, l->fields[j].name) != 0);

@@ -125,6 +125,7 @@ enum wsg_field_type {
     WSG_FT_VERSION,    /* u16: major << 12 | minor << 8 | patch << 4 */
     WSG_FT_ENUM8,      /* u8, names by value */
     WSG_FT_BITS8,      /* u8 bit vector, names by bit */
+    WSG_FT_BITS16,     /* u16 bit vector, names by bit */
     WSG_FT_BITS32,     /* u32 bit vector, names by bit */
     WSG_FT_TEXT,       /* the rest of the payload, up to max: characters */
     WSG_FT_BYTES       /* the rest of the payload, up to max: raw bytes */
@@ -163,6 +164,7 @@ struct wsg_layout {
 #define WSG_F_VERSION(nm)     WSG_FIELD_(nm, WSG_FT_VERSION, "", .max = 0)
 #define WSG_F_ENUM8(nm, nms)  WSG_FIELD_(nm, WSG_FT_ENUM8, "", nms)
 #define WSG_F_BITS8(nm, nms)  WSG_FIELD_(nm, WSG_FT_BITS8, "", nms)
+#define WSG_F_BITS16(nm, nms) WSG_FIELD_(nm, WSG_FT_BITS16, "", nms)
 #define WSG_F_BITS32(nm, nms) WSG_FIELD_(nm, WSG_FT_BITS32, "", nms)
 #define WSG_F_TEXT(nm, mx)    WSG_FIELD_(nm, WSG_FT_TEXT, "", .max = (mx))
 #define WSG_F_BYTES(nm, mx)   WSG_FIELD_(nm, WSG_FT_BYTES, "", .max = (mx))
@@ -195,6 +197,11 @@ struct wsg_layout {
     WSG_FIELDS(                                                               \
         WSG_F_ENUM8("type", WSG_NAMES("none", "generic", "fmf", "dsa")),      \
         WSG_F_U16("size", ""))
+/* 61h/71h: include/wsg/finger.h's WSG_FF_* by bit (docs/fingers.md). */
+#define WSG_FINGER_FLAGS                                                      \
+    WSG_FIELDS(WSG_F_BITS16("flags",                                          \
+                            WSG_NAMES("powered", "data", "fault", "contact",  \
+                                      "uart", "spi", "overrun")))
 #define WSG_FINGER_POWER                                                      \
     WSG_FIELDS(WSG_F_ENUM8("power", WSG_NAMES("off", "on")))
 
@@ -313,8 +320,7 @@ struct wsg_layout {
     X(0x60, GET_FINGER1_INFO, finger_info, "GetFinger1Info", 1, 1,            \
       WSG_CMDF_EMPTY_OK, WSG_FINGER_INDEX, WSG_FINGER_INFO)                   \
     X(0x61, GET_FINGER1_FLAGS, finger_flags, "GetFinger1Flags", 1, 1,         \
-      WSG_CMDF_EMPTY_OK, WSG_FINGER_INDEX,                                    \
-      WSG_FIELDS(WSG_F_U16("flags", "")))                                     \
+      WSG_CMDF_EMPTY_OK, WSG_FINGER_INDEX, WSG_FINGER_FLAGS)                  \
     X(0x62, FINGER1_POWER, finger_power, "Finger1PowerControl", 1, 2, 0,      \
       WSG_FINGER_POWER, WSG_NONE)                                             \
     X(0x63, GET_FINGER1_DATA, finger_data, "GetFinger1Data", 1, 1,            \
@@ -323,7 +329,7 @@ struct wsg_layout {
     X(0x70, GET_FINGER2_INFO, finger_info, "GetFinger2Info", 0, 0,            \
       WSG_CMDF_NO_PARAM, WSG_NONE, WSG_FINGER_INFO)                           \
     X(0x71, GET_FINGER2_FLAGS, finger_flags, "GetFinger2Flags", 0, 0,         \
-      WSG_CMDF_NO_PARAM, WSG_NONE, WSG_FIELDS(WSG_F_U16("flags", "")))        \
+      WSG_CMDF_NO_PARAM, WSG_NONE, WSG_FINGER_FLAGS)                          \
     X(0x72, FINGER2_POWER, finger_power, "Finger2PowerControl", 1, 1, 0,      \
       WSG_FINGER_POWER, WSG_NONE)                                             \
     X(0x73, GET_FINGER2_DATA, finger_data, "GetFinger2Data", 0, 0,            \
@@ -393,6 +399,9 @@ struct wsg_value {
     size_t len;
 };
 
+/* The type's name as the generated tables spell it ("u8", "bits16",
+ * "i16_tenths"), or NULL for a number that is no type. */
+const char *wsg_field_type_name(unsigned type);
 /* Bytes of the fields before a TEXT or BYTES one: the whole size of a
  * layout without one. */
 size_t wsg_layout_size(const struct wsg_layout *l);

@@ -14,7 +14,7 @@ import time
 
 import pytest
 
-from wsgemu import (Cmd, ControlError, GraspState, Status,
+from wsgemu import (Cmd, ControlError, FingerFlag, GraspState, Status,
                     SystemFlag, WsgError, WsgTimeout)
 
 STROKE = 110.0  # WSG 50
@@ -394,6 +394,7 @@ def test_finger_helpers_follow_a_grasp(wsgemu):
     g, c = wsgemu.gripper, wsgemu.control
     assert g.finger_info(0) == (3, 168) and g.finger_info(1) == (2, 4)
     assert g.finger_flags(0) & 0x3 == 0x3  # powered, data
+    assert FingerFlag.POWERED in g.finger_flags(1)
     g.home()
     c.part(40.0)
     g.set_force_limit(20.0)

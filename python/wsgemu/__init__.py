@@ -8,8 +8,8 @@ emulator's control channel, and a pytest plugin that runs the emulator.
 - the ``wsgemu`` pytest fixture (``wsgemu.plugin``), loaded automatically.
 """
 
-from .client import (Cmd, Control, ControlError, Frame, FrameParser,
-                     GraspState, GraspStats, Gripper, Pending, Reply, Status,
+from .client import (Cmd, Control, ControlError, FingerFlag, Frame,
+                     FrameParser, GraspState, GraspStats, Gripper, Pending, Reply, Status,
                      SystemFlag, SystemInfo, SystemLimits, WsgError,
                      WsgTimeout, crc16, encode_frame, status_name)
 from .daemon import (AttachedEmulator, DaemonError, Emulator, bundled_binary,
@@ -20,7 +20,7 @@ __version__ = "0.1.0"
 
 __all__ = [
     "AttachedEmulator", "Cmd", "Control", "ControlError", "DaemonError",
-    "Emulator", "Frame", "bundled_binary", "free_udp_port", "parse_attach",
+    "Emulator", "FingerFlag", "Frame", "bundled_binary", "free_udp_port", "parse_attach",
     "FrameParser", "GraspState", "GraspStats", "Gripper", "Pending", "Reply",
     "Status", "SystemFlag", "SystemInfo", "SystemLimits", "WsgError",
     "WsgTimeout", "crc16", "encode_frame", "find_binary", "parse_ready_line",

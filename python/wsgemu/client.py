@@ -175,6 +175,19 @@ class SystemFlag(enum.IntFlag):
     SF_SCRIPT_FAILURE = 1 << 20
 
 
+class FingerFlag(enum.IntFlag):
+    """Bits of Get Finger Flags (61h/71h), wsgemu's choice
+    (docs/fingers.md)."""
+
+    POWERED = 1 << 0
+    DATA = 1 << 1
+    FAULT = 1 << 2
+    CONTACT = 1 << 3
+    UART = 1 << 4
+    SPI = 1 << 5
+    OVERRUN = 1 << 6
+
+
 class GraspState(enum.IntEnum):
     """Grasping states (41h) as real grippers report them."""
 
@@ -722,11 +735,11 @@ class Gripper:
         p = self.command(self._finger_cmd(finger, Cmd.GET_FINGER1_INFO))
         return p[0], int(struct.unpack_from("<H", p, 1)[0])
 
-    def finger_flags(self, finger: int) -> int:
-        """Get Finger Flags (61h/71h): D0 powered, D1 data, D2 fault, D3
-        contact, D4 UART, D5 SPI, D6 overrun."""
+    def finger_flags(self, finger: int) -> FingerFlag:
+        """Get Finger Flags (61h/71h): FingerFlag's bits (D0 powered, D1
+        data, D2 fault, D3 contact, D4 UART, D5 SPI, D6 overrun)."""
         p = self.command(self._finger_cmd(finger, Cmd.GET_FINGER1_FLAGS))
-        return int(struct.unpack_from("<H", p)[0])
+        return FingerFlag(struct.unpack_from("<H", p)[0])
 
     def finger_power(self, finger: int, on: bool) -> None:
         """Finger Power Control (62h/72h)."""

@@ -77,6 +77,7 @@ static size_t wsg_field_size(const struct wsg_field *f)
     case WSG_FT_U16:
     case WSG_FT_I16_TENTHS:
     case WSG_FT_VERSION:
+    case WSG_FT_BITS16:
         return 2;
     case WSG_FT_U32:
     case WSG_FT_F32:
@@ -85,6 +86,24 @@ static size_t wsg_field_size(const struct wsg_field *f)
     default:
         return 0;
     }
+}
+
+const char *wsg_field_type_name(unsigned type)
+{
+    static const char *const names[] = {[WSG_FT_U8] = "u8",
+                                        [WSG_FT_U16] = "u16",
+                                        [WSG_FT_U32] = "u32",
+                                        [WSG_FT_F32] = "f32",
+                                        [WSG_FT_I16_TENTHS] = "i16_tenths",
+                                        [WSG_FT_VERSION] = "version",
+                                        [WSG_FT_ENUM8] = "enum8",
+                                        [WSG_FT_BITS8] = "bits8",
+                                        [WSG_FT_BITS16] = "bits16",
+                                        [WSG_FT_BITS32] = "bits32",
+                                        [WSG_FT_TEXT] = "text",
+                                        [WSG_FT_BYTES] = "bytes"};
+
+    return type < sizeof names / sizeof names[0] ? names[type] : NULL;
 }
 
 static int wsg_field_rest(const struct wsg_field *f)
@@ -208,7 +227,7 @@ static void wsg_put_bits(const struct wsg_value *v,
                          const struct wsg_value_style *st, char *buf,
                          size_t cap, size_t *n)
 {
-    unsigned bit, bits = v->field->type == WSG_FT_BITS8 ? 8 : 32;
+    unsigned bit, bits = 8 * (unsigned)wsg_field_size(v->field);
     int first = 1;
 
     for (bit = 0; bit < bits; bit++) {
@@ -258,8 +277,9 @@ size_t wsg_value_format(const struct wsg_value *v,
         break;
     }
     case WSG_FT_BITS8:
+    case WSG_FT_BITS16:
     case WSG_FT_BITS32:
-        wsg_put(buf, cap, &n, "0x%0*lX", f->type == WSG_FT_BITS8 ? 2 : 8,
+        wsg_put(buf, cap, &n, "0x%0*lX", 2 * (int)wsg_field_size(f),
                 (unsigned long)v->raw);
         if (!st->bare)
             wsg_put_bits(v, st, buf, cap, &n);

@@ -6,8 +6,8 @@ SCHEMA_DUMP is the schema_dump program (the schema of include/wsg/schema.h
 as JSON); CLIENT_PY is python/wsgemu/client.py, loaded by its path alone so
 nothing is installed and no bytecode is written into the source tree. Every
 difference is listed (command IDs, status codes, system flag names and
-bits, grasping states, the motion commands, the device types of 50h and
-the fields of 42h), and any makes the exit status 1.
+bits, the finger flags of 61h and 71h, grasping states, the motion
+commands, the device types of 50h and the fields of 42h), and any makes the exit status 1.
 """
 
 import importlib.util
@@ -50,6 +50,12 @@ def main(argv):
     compare("system flag", {m.name: m.value for m in client.SystemFlag},
             {n: 1 << bit for n, bit in schema["system_flags"].items()},
             problems)
+    flags = commands["GET_FINGER1_FLAGS"]["reply"][0]
+    compare("finger flag", {m.name: m.value for m in client.FingerFlag},
+            {n.upper(): 1 << bit for bit, n in enumerate(flags["names"])
+             if n}, problems)
+    compare("finger flag (71h)", {0: flags},
+            {0: commands["GET_FINGER2_FLAGS"]["reply"][0]}, problems)
     compare("grasping state", {m.name: m.value for m in client.GraspState},
             schema["grasp_states"], problems)
     compare("motion command",

@@ -27,23 +27,13 @@ static void str(const char *s)
 
 static const char *type_name(uint8_t t)
 {
-    static const char *const names[] = {[WSG_FT_U8] = "u8",
-                                        [WSG_FT_U16] = "u16",
-                                        [WSG_FT_U32] = "u32",
-                                        [WSG_FT_F32] = "f32",
-                                        [WSG_FT_I16_TENTHS] = "i16_tenths",
-                                        [WSG_FT_VERSION] = "version",
-                                        [WSG_FT_ENUM8] = "enum8",
-                                        [WSG_FT_BITS8] = "bits8",
-                                        [WSG_FT_BITS32] = "bits32",
-                                        [WSG_FT_TEXT] = "text",
-                                        [WSG_FT_BYTES] = "bytes"};
+    const char *name = wsg_field_type_name(t);
 
-    if (t >= sizeof names / sizeof names[0] || !names[t]) {
+    if (!name) {
         fprintf(stderr, "schema_dump: unknown field type %u\n", t);
         exit(1);
     }
-    return names[t];
+    return name;
 }
 
 static void layout(const struct wsg_layout *l)

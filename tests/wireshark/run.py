@@ -55,7 +55,7 @@ def crc16(data, table):
 
 
 SIZES = {"u8": 1, "u16": 2, "u32": 4, "f32": 4, "i16_tenths": 2,
-         "version": 2, "enum8": 1, "bits8": 1, "bits32": 4}
+         "version": 2, "enum8": 1, "bits8": 1, "bits16": 2, "bits32": 4}
 
 
 def key(s):
@@ -97,7 +97,7 @@ def encode_value(f):
         return struct.pack("<f", 40.0)
     if t == "i16_tenths":
         return struct.pack("<h", 215)
-    if t in ("bits8", "bits32"):
+    if t in ("bits8", "bits16", "bits32"):
         return bytes(SIZES[t])  # no flags: no stream, no reset
     if t == "u16":
         return struct.pack("<H", 0)
@@ -440,7 +440,7 @@ def compare(schema, expected, got, link):
                     g = int(f.get("show"), 0)
                     if g != v:
                         fail("%s: %s %d, sent %d" % (where, name, g, v))
-                    if t in ("bits8", "bits32"):
+                    if t in ("bits8", "bits16", "bits32"):
                         # Each named bit, as a field of its own.
                         for fd in layout:
                             if fd["name"] != name:

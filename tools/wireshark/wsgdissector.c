@@ -16,25 +16,6 @@
 
 #include "wsg/proto.h"
 
-static const char *type_name(uint8_t t)
-{
-    static const char *const names[] = {[WSG_FT_U8] = "u8",
-                                        [WSG_FT_U16] = "u16",
-                                        [WSG_FT_U32] = "u32",
-                                        [WSG_FT_F32] = "f32",
-                                        [WSG_FT_I16_TENTHS] = "i16_tenths",
-                                        [WSG_FT_VERSION] = "version",
-                                        [WSG_FT_ENUM8] = "enum8",
-                                        [WSG_FT_BITS8] = "bits8",
-                                        [WSG_FT_BITS32] = "bits32",
-                                        [WSG_FT_TEXT] = "text",
-                                        [WSG_FT_BYTES] = "bytes"};
-
-    if (t >= sizeof names / sizeof names[0] || !names[t])
-        return NULL;
-    return names[t];
-}
-
 /* A schema name as a Lua string: they are plain ASCII; anything else is a
  * broken schema, refused rather than escaped. Returns 0 or -1. */
 static int str(FILE *o, const char *s)
@@ -57,7 +38,7 @@ static int layout(FILE *o, const struct wsg_layout *l)
     fputs("{", o);
     for (i = 0; i < l->n; i++) {
         const struct wsg_field *f = &l->fields[i];
-        const char *t = type_name(f->type);
+        const char *t = wsg_field_type_name(f->type);
 
         if (!t) {
             fprintf(stderr, "wsgdissector: field %s: unknown type %u\n",

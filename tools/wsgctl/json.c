@@ -121,6 +121,7 @@ void jout_value(struct jout *j, const struct wsg_value *v)
             jout_str(j, name, p + 1, strlen(p + 1));
         break;
     case WSG_FT_BITS8:
+    case WSG_FT_BITS16:
     case WSG_FT_BITS32:
         jout_add(j, ",\"%s\":%lu,\"%s_names\":[", key, (unsigned long)v->raw,
                  key);
