@@ -24,7 +24,9 @@ int wsg_plant_mujoco_open(struct wsg_plant **p,
     (void)left;
     (void)right;
     snprintf(err, errlen,
-             "this build has no MuJoCo plant (built without "
-             "libmujoco-dev or with -DWSG_MUJOCO=OFF)");
+             "this build has no MuJoCo plant (a static build, as in the "
+             "wheel and the container, or built without libmujoco-dev or "
+             "with -DWSG_MUJOCO=OFF): use Debian's package or a source "
+             "build");
     return -ENOTSUP;
 }
