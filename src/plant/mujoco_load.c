@@ -54,12 +54,10 @@ static int program_dir(char *dir, size_t n)
 /* Open the module once: 0, or -errno with the reason in err. */
 static int load(char *err, size_t errlen)
 {
-    static const char *const where[] = {"plants/", WSG_PLANT_RELDIR "/"};
-    char dir[WSG_PLANT_PATH_MAX], path[WSG_PLANT_PATH_MAX];
-    char tried[2 * WSG_PLANT_PATH_MAX + 64] = "";
+    /* Room for the directory and the longest tail after it. */
+    char dir[WSG_PLANT_PATH_MAX], path[2][WSG_PLANT_PATH_MAX + 64];
     const char *version;
-    size_t i;
-    int r;
+    int r, i;
 
     if (module)
         return 0;
@@ -69,35 +67,30 @@ static int load(char *err, size_t errlen)
                  strerror(-r));
         return r;
     }
-    for (i = 0; i < sizeof where / sizeof where[0]; i++) {
-        r = snprintf(path, sizeof path, "%s%s" WSG_PLANT_MODULE, dir,
-                     where[i]);
-        if (r < 0 || (size_t)r >= sizeof path)
-            continue;
-        if (access(path, F_OK) == 0)
-            break;
-        snprintf(tried + strlen(tried), sizeof tried - strlen(tried), "%s%s",
-                 i ? " or " : "", path);
-    }
-    if (i == sizeof where / sizeof where[0]) {
+    snprintf(path[0], sizeof path[0], "%splants/" WSG_PLANT_MODULE, dir);
+    snprintf(path[1], sizeof path[1],
+             "%s" WSG_PLANT_RELDIR "/" WSG_PLANT_MODULE, dir);
+    for (i = 0; i < 2 && access(path[i], F_OK) != 0; i++)
+        ;
+    if (i == 2) {
         snprintf(err, errlen,
-                 "the MuJoCo plant is not installed (no %s; Debian's "
+                 "the MuJoCo plant is not installed (no %s or %s; Debian's "
                  "package has it, a source build needs libmujoco-dev)",
-                 tried);
+                 path[0], path[1]);
         return -ENOENT;
     }
     /* RTLD_LOCAL: MuJoCo's symbols stay the module's. RTLD_NOW: a missing
      * library is told now, not at the first step. */
-    module = dlopen(path, RTLD_NOW | RTLD_LOCAL);
+    module = dlopen(path[i], RTLD_NOW | RTLD_LOCAL);
     if (!module) {
-        snprintf(err, errlen, "cannot load %s: %s", path, dlerror());
+        snprintf(err, errlen, "cannot load %s: %s", path[i], dlerror());
         return -ENOEXEC;
     }
     version = dlsym(module, "wsg_plant_mujoco_version");
     *(void **)&module_open = dlsym(module, "wsg_plant_mujoco_open");
     if (!version || !module_open || strcmp(version, WSG_VERSION) != 0) {
         snprintf(err, errlen, "%s is not this wsgemu's (version %s) plant",
-                 path, WSG_VERSION);
+                 path[i], WSG_VERSION);
         dlclose(module);
         module = NULL;
         module_open = NULL;

@@ -7,7 +7,8 @@ as JSON); CLIENT_PY is python/wsgemu/client.py, loaded by its path alone so
 nothing is installed and no bytecode is written into the source tree. Every
 difference is listed (command IDs, status codes, system flag names and
 bits, the finger flags of 61h and 71h, grasping states, the motion
-commands, the device types of 50h and the fields of 42h), and any makes the exit status 1.
+commands, the device types of 50h and the fields of 42h), and any makes
+the exit status 1.
 """
 
 import importlib.util

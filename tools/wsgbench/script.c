@@ -69,9 +69,7 @@ static int sd_start(struct bench *b, struct emud *d, const char *file,
     char *argv[] = {b->emu_exe,    "--tcp",    "127.0.0.1:0", "--control",
                     "127.0.0.1:0", "--script", path,          NULL};
 
-    d->started = 0;
-    link_init(&d->l, L_TCP, name);
-    link_init(&d->ctl, L_TCP, name);
+    emud_init(d, name);
     if (script_file(b, file, path, sizeof path) < 0)
         return -1;
     return emud_start(b, d, name, argv);

@@ -259,13 +259,20 @@ int link_ready(struct link *l, const char *line, const char *key)
     return rc;
 }
 
-/* Start d from argv (named name) and connect to its control channel and
- * TCP. 0, or -1 (reported); emud_stop() in either case. */
-int emud_start(struct bench *b, struct emud *d, const char *name, char **argv)
+/* d with nothing started yet (emud_stop() does nothing). */
+void emud_init(struct emud *d, const char *name)
 {
     link_init(&d->l, L_TCP, name);
     link_init(&d->ctl, L_TCP, name);
     d->started = 0;
+}
+
+/* Start d from argv (named name) and connect to its control channel and
+ * TCP. 0, or -1 (reported); emud_stop() in either case. */
+
+int emud_start(struct bench *b, struct emud *d, const char *name, char **argv)
+{
+    emud_init(d, name);
     if (server_start(b, &d->s, name, argv, READY_MS) < 0)
         return -1;
     d->started = 1;

@@ -164,6 +164,7 @@ struct emud {
     struct link l, ctl;
     int started;
 };
+void emud_init(struct emud *d, const char *name);
 int emud_start(struct bench *b, struct emud *d, const char *name, char **argv);
 int emud_stop(struct emud *d);
 int attach_lacks(const struct bench *b, const char *key, const char *rows);
