@@ -188,6 +188,9 @@
         : k.sel.value));
 
     ev.preventDefault();
+    /* The last answer goes at once: what shows next is this fit's. */
+    message.textContent = 'Fitting...';
+    message.classList.remove('bad');
     /* One after the other, as the control channel takes them. */
     lines.reduce((p, line) => p.then((out) =>
       wsg.post('/control', { line }).then((a) =>

@@ -26,6 +26,8 @@ def fit_on_page(page, kinds):
         Select(page.find_element(By.ID, "fingers-kind-%d" % i)) \
             .select_by_value(kind)
     page.find_element(By.ID, "fingers-apply").click()
+    # The page clears the last fit's answer at once: two "ok" are this
+    # fit's.
     wait(page).until(lambda d: text(d, "fingers-message").count("ok") == 2)
 
 
